@@ -1,0 +1,129 @@
+//! The trait every acceleration structure implements.
+
+use crate::{NoStats, Primitive, Ray, Stats};
+use std::fmt::Debug;
+
+/// The closest hit of a ray: which primitive (its index in the slice the structure was built
+/// from), where along the ray, and the primitive's surface coordinates there.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit {
+    /// Index of the primitive in the build input.
+    pub prim: u32,
+    /// Ray parameter of the hit.
+    pub t: f32,
+    /// First surface coordinate (barycentric weight of `v1` for triangles).
+    pub u: f32,
+    /// Second surface coordinate (barycentric weight of `v2` for triangles).
+    pub v: f32,
+}
+
+impl Hit {
+    /// The tie rule every structure follows: a hit at `(t, prim)` replaces the best so far when it
+    /// is strictly closer, or equally close on a primitive with a smaller index. This makes the
+    /// answer unique, so two correct structures always agree exactly.
+    #[inline(always)]
+    pub fn beats(t: f32, prim: u32, best_t: f32, best_prim: u32) -> bool {
+        t < best_t || (t == best_t && prim < best_prim)
+    }
+}
+
+/// Shape of a built structure, reported by [`Accel::build_stats`].
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct BuildStats {
+    /// Nodes (or cells) in the structure, leaves included.
+    pub nodes: usize,
+    /// Leaves (or non-empty cells).
+    pub leaves: usize,
+    /// Leaves holding no primitive.
+    pub empty_leaves: usize,
+    /// Depth of the deepest leaf; the root has depth 0.
+    pub max_depth: usize,
+    /// Primitive references held by all leaves (more than `valid_prims` when a structure stores a
+    /// primitive in several leaves).
+    pub prim_refs: usize,
+    /// Primitives the structure kept (the valid ones; see [`Primitive::is_valid`]).
+    pub valid_prims: usize,
+    /// Structure-specific figures, named, for reports.
+    pub extra: Vec<(&'static str, f64)>,
+}
+
+impl BuildStats {
+    /// Average primitive references per non-empty leaf.
+    pub fn avg_prims_per_leaf(&self) -> f64 {
+        let full = self.leaves - self.empty_leaves;
+        if full == 0 {
+            0.0
+        } else {
+            self.prim_refs as f64 / full as f64
+        }
+    }
+
+    /// References per kept primitive (1 for structures that never duplicate).
+    pub fn duplication(&self) -> f64 {
+        if self.valid_prims == 0 {
+            0.0
+        } else {
+            self.prim_refs as f64 / self.valid_prims as f64
+        }
+    }
+}
+
+/// A ray-tracing acceleration structure over primitives of type [`Accel::Prim`].
+///
+/// Contract, checked for every implementation by the conformance kit
+/// ([`conformance`](crate::conformance), feature `conformance`):
+/// - [`intersect`](Accel::intersect) returns exactly what [`BruteForce`](crate::BruteForce)
+///   returns: the hit with the smallest `t` in `[ray.t_min, ray.t_max]`, ties broken by the
+///   smallest primitive index ([`Hit::beats`]);
+/// - [`occluded`](Accel::occluded) is true exactly when `intersect` would return a hit, and may
+///   stop at the first one it finds;
+/// - invalid primitives ([`Primitive::is_valid`]) are never hit;
+/// - building and tracing never panic and never loop, whatever the input.
+///
+/// ```
+/// use rt_core::{Accel, BruteForce, Ray, Triangle, glam::Vec3};
+/// let tris = [Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y)];
+/// let accel = BruteForce::build(&tris, &Default::default());
+/// let hit = accel.intersect(&Ray::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z)).unwrap();
+/// assert_eq!((hit.prim, hit.t), (0, 1.0));
+/// ```
+pub trait Accel: Sized + Send + Sync {
+    /// The primitive type stored.
+    type Prim: Primitive;
+    /// Build parameters; `Default` is the recommended preset.
+    type Params: Clone + Debug + Default + Send + Sync;
+
+    /// Short name used for reports (`"bvh"`, `"kdtree"`, ...).
+    const NAME: &'static str;
+
+    /// Named parameter presets, the default first. `compare` names rows `NAME` for the first and
+    /// `NAME-preset` for the others.
+    fn presets() -> Vec<(&'static str, Self::Params)>;
+
+    /// Builds the structure over `prims`; indices in hits refer to this slice.
+    fn build(prims: &[Self::Prim], params: &Self::Params) -> Self;
+
+    /// The closest hit, reporting traversal events to `stats`.
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit>;
+
+    /// Whether anything is hit in the ray's interval, reporting events to `stats`.
+    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool;
+
+    /// The closest hit.
+    #[inline]
+    fn intersect(&self, ray: &Ray) -> Option<Hit> {
+        self.intersect_with(ray, &mut NoStats)
+    }
+
+    /// Whether anything is hit in the ray's interval (for shadow rays).
+    #[inline]
+    fn occluded(&self, ray: &Ray) -> bool {
+        self.occluded_with(ray, &mut NoStats)
+    }
+
+    /// Heap and inline bytes the structure holds, its copy of the primitives included.
+    fn memory_bytes(&self) -> usize;
+
+    /// The structure's shape.
+    fn build_stats(&self) -> BuildStats;
+}

@@ -1,0 +1,76 @@
+//! The O(N) reference every structure is checked against.
+
+use crate::{Accel, BuildStats, Hit, Primitive, Ray, Stats};
+
+/// Tests every primitive for every ray and keeps the closest: the definition of the right answer.
+///
+/// The cost is one primitive test per valid primitive per ray; there is nothing to tune.
+#[derive(Clone, Debug)]
+pub struct BruteForce<P: Primitive> {
+    prims: Vec<P>,
+    ids: Vec<u32>,
+}
+
+impl<P: Primitive> Accel for BruteForce<P> {
+    type Prim = P;
+    type Params = ();
+    const NAME: &'static str = "brute-force";
+
+    fn presets() -> Vec<(&'static str, ())> {
+        vec![("default", ())]
+    }
+
+    fn build(prims: &[P], _: &()) -> Self {
+        let (ids, prims) = prims
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.is_valid())
+            .map(|(i, p)| (i as u32, p.clone()))
+            .unzip();
+        Self { prims, ids }
+    }
+
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        let mut best: Option<Hit> = None;
+        let mut t_max = ray.t_max;
+        for (p, &id) in self.prims.iter().zip(&self.ids) {
+            stats.prim_test();
+            if let Some(h) = p.intersect(ray, t_max) {
+                // Ids increase along the array, so an equal t never replaces an earlier hit.
+                if best.is_none_or(|b| h.t < b.t) {
+                    best = Some(Hit {
+                        prim: id,
+                        t: h.t,
+                        u: h.u,
+                        v: h.v,
+                    });
+                    t_max = h.t;
+                }
+            }
+        }
+        best
+    }
+
+    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+        self.prims.iter().any(|p| {
+            stats.prim_test();
+            p.occludes(ray, ray.t_max)
+        })
+    }
+
+    fn memory_bytes(&self) -> usize {
+        size_of::<Self>() + self.prims.capacity() * size_of::<P>() + self.ids.capacity() * 4
+    }
+
+    fn build_stats(&self) -> BuildStats {
+        BuildStats {
+            nodes: 0,
+            leaves: 1,
+            empty_leaves: usize::from(self.prims.is_empty()),
+            max_depth: 0,
+            prim_refs: self.prims.len(),
+            valid_prims: self.prims.len(),
+            extra: Vec::new(),
+        }
+    }
+}

@@ -1,0 +1,731 @@
+//! The conformance kit: checks that an [`Accel`] implementation answers exactly like
+//! [`BruteForce`], on fixed adversarial scenes and on proptest-generated random scenes and rays.
+//!
+//! A structure crate (or a student's) enables the `conformance` feature of `rt-core` in its
+//! dev-dependencies and writes one line per preset in a test file:
+//!
+//! ```ignore
+//! rt_core::conformance_tests!(sah, rt_bvh::Bvh<rt_core::Triangle>, rt_bvh::BvhParams::sah());
+//! ```
+//!
+//! That expands to a module `sah` with one `#[test]` per adversarial scene plus a proptest run,
+//! so a failure names the scene. Each failure message prints the offending ray as Rust source
+//! (and the scene, when it is small) so it can be pasted into a regression test.
+//!
+//! "Answers exactly like brute force" means: for every ray, the same primitive index (ties broken
+//! by smallest `t`, then smallest index), `t` within a relative 1e-5, and the same occlusion
+//! answer; the answer must not change when statistics are counted; and the structure must report
+//! the number of valid primitives it kept.
+//!
+//! The number of proptest cases is proptest's default (256) unless `PROPTEST_CASES` is set.
+
+use crate::{Accel, BruteForce, Counters, Hit, Primitive, Ray, Rng, Sphere, Triangle};
+use glam::Vec3;
+use proptest::prelude::*;
+use proptest::test_runner::{Config, TestRunner};
+use std::fmt;
+
+/// A disagreement between a structure and brute force on one ray.
+#[derive(Clone, Debug)]
+pub struct Mismatch {
+    /// Which query disagreed: `"intersect"`, `"occluded"` or `"intersect_with(Counters)"`.
+    pub query: &'static str,
+    /// The ray.
+    pub ray: Ray,
+    /// What brute force answered (for `occluded`, `Some` means occluded).
+    pub expected: Option<Hit>,
+    /// What the structure answered.
+    pub got: Option<Hit>,
+}
+
+impl fmt::Display for Mismatch {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(
+            f,
+            "{} disagrees with brute force\n  ray: {}\n  rays-file line: {}\n  expected: {:?}\n  got:      {:?}",
+            self.query,
+            self.ray.to_rust(),
+            self.ray.to_line(),
+            self.expected,
+            self.got
+        )
+    }
+}
+
+/// Whether two closest-hit answers agree: same primitive and `t` within a relative `1e-5`.
+pub fn same_hit(a: Option<Hit>, b: Option<Hit>) -> bool {
+    match (a, b) {
+        (None, None) => true,
+        (Some(a), Some(b)) => a.prim == b.prim && (a.t - b.t).abs() <= 1e-5 * a.t.abs().max(1.0),
+        _ => false,
+    }
+}
+
+/// Compares `accel` with `reference` on every ray, returning the first disagreement.
+///
+/// # Errors
+/// The first [`Mismatch`].
+pub fn compare_rays<A: Accel>(
+    accel: &A,
+    reference: &BruteForce<A::Prim>,
+    rays: &[Ray],
+) -> Result<(), Mismatch> {
+    for ray in rays {
+        let expected = reference.intersect(ray);
+        let got = accel.intersect(ray);
+        if !same_hit(expected, got) {
+            return Err(Mismatch {
+                query: "intersect",
+                ray: *ray,
+                expected,
+                got,
+            });
+        }
+        let counted = accel.intersect_with(ray, &mut Counters::default());
+        if !same_hit(got, counted) {
+            return Err(Mismatch {
+                query: "intersect_with(Counters)",
+                ray: *ray,
+                expected: got,
+                got: counted,
+            });
+        }
+        let occluded = accel.occluded(ray);
+        if occluded != expected.is_some() {
+            let as_hit = |b: bool| {
+                b.then_some(Hit {
+                    prim: u32::MAX,
+                    t: f32::NAN,
+                    u: 0.0,
+                    v: 0.0,
+                })
+            };
+            return Err(Mismatch {
+                query: "occluded",
+                ray: *ray,
+                expected: as_hit(expected.is_some()),
+                got: as_hit(occluded),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Builds `A` and brute force over `prims` and compares them on `rays`; also checks that the
+/// structure reports the number of valid primitives it kept. Returns a message describing the
+/// first failure.
+///
+/// # Errors
+/// A description of the first failure, with the scene when it has at most 12 primitives.
+pub fn check_case<A: Accel>(
+    params: &A::Params,
+    prims: &[A::Prim],
+    rays: &[Ray],
+) -> Result<(), String> {
+    let reference = BruteForce::build(prims, &());
+    let accel = A::build(prims, params);
+    let scene = || {
+        if prims.len() <= 12 {
+            format!("\n  scene: {prims:?}")
+        } else {
+            format!("\n  scene: {} primitives", prims.len())
+        }
+    };
+    let valid = prims.iter().filter(|p| p.is_valid()).count();
+    let kept = accel.build_stats().valid_prims;
+    if kept != valid {
+        return Err(format!(
+            "{}: build_stats().valid_prims is {kept}, but {valid} primitives are valid{}",
+            A::NAME,
+            scene()
+        ));
+    }
+    compare_rays(&accel, &reference, rays)
+        .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))
+}
+
+/// A fixed adversarial scene: triangles and the rays that probe them.
+#[derive(Clone, Debug)]
+pub struct Scene {
+    /// Triangles, in primitive-index order.
+    pub triangles: Vec<Triangle>,
+    /// Rays to compare on.
+    pub rays: Vec<Ray>,
+}
+
+/// Names of the fixed adversarial scenes, in the order [`scene`] knows them.
+pub const SCENES: &[&str] = &[
+    "empty_scene",
+    "one_triangle",
+    "shared_edge",
+    "identical_triangles",
+    "equal_centroids",
+    "zero_area_triangles",
+    "axis_parallel_rays",
+    "rays_in_box_faces",
+    "origins_inside",
+    "large_coordinates",
+    "nan_vertex",
+    "exponential_chain",
+];
+
+/// The adversarial scene called `name` (one of [`SCENES`]).
+///
+/// # Panics
+/// If `name` is not in [`SCENES`].
+pub fn scene(name: &str) -> Scene {
+    match name {
+        "empty_scene" => Scene {
+            triangles: vec![],
+            rays: random_rays(&mut Rng::new(1), Vec3::splat(-1.0), Vec3::ONE, 64),
+        },
+        "one_triangle" => one_triangle(),
+        "shared_edge" => shared_edge(),
+        "identical_triangles" => identical_triangles(),
+        "equal_centroids" => equal_centroids(),
+        "zero_area_triangles" => zero_area_triangles(),
+        "axis_parallel_rays" => axis_parallel_rays(),
+        "rays_in_box_faces" => rays_in_box_faces(),
+        "origins_inside" => origins_inside(),
+        "large_coordinates" => large_coordinates(),
+        "nan_vertex" => nan_vertex(),
+        "exponential_chain" => exponential_chain(),
+        _ => panic!("unknown conformance scene `{name}`; see rt_core::conformance::SCENES"),
+    }
+}
+
+/// Checks structure `A` with `params` on the named adversarial scene.
+///
+/// # Panics
+/// With a description of the first disagreement with brute force.
+pub fn check_scene<A: Accel<Prim = Triangle>>(params: &A::Params, name: &str) {
+    let s = scene(name);
+    if let Err(e) = check_case::<A>(params, &s.triangles, &s.rays) {
+        panic!("conformance scene `{name}` failed: {e}");
+    }
+}
+
+/// Runs proptest on random triangle scenes and rays for structure `A` with `params`.
+///
+/// Coordinates are drawn partly from a coarse lattice so that shared vertices, coplanar
+/// triangles, rays through edges and vertices, and axis-parallel directions with `±0`
+/// components come up often.
+///
+/// # Panics
+/// With the shrunk failing case.
+pub fn check_random<A: Accel<Prim = Triangle>>(params: &A::Params) {
+    let coord = || prop_oneof![(-6i32..=6).prop_map(|i| i as f32 * 0.5), -4.0f32..4.0];
+    let vec3 = move || (coord(), coord(), coord()).prop_map(|(x, y, z)| Vec3::new(x, y, z));
+    let tri = (vec3(), vec3(), vec3()).prop_map(|(a, b, c)| Triangle::new(a, b, c));
+    let dir_c = || {
+        prop_oneof![
+            Just(0.0f32),
+            Just(-0.0f32),
+            Just(1.0f32),
+            Just(-1.0f32),
+            -1.0f32..1.0
+        ]
+    };
+    // A ray either aims at a lattice point on a triangle (vertex, edge midpoint, centroid) or
+    // goes in a random direction; `t_max` is sometimes finite and `t_min` sometimes positive.
+    let ray = (
+        vec3(),
+        (dir_c(), dir_c(), dir_c()),
+        prop::option::of((any::<prop::sample::Index>(), 0usize..7)),
+        prop_oneof![Just(f32::INFINITY), 0.1f32..20.0],
+        prop_oneof![3 => Just(0.0f32), 1 => 0.0f32..2.0],
+    );
+    let strategy = (
+        prop::collection::vec(tri, 0..60),
+        prop::collection::vec(ray, 1..40),
+    );
+    let mut runner = TestRunner::new(Config {
+        failure_persistence: None,
+        ..Config::default()
+    });
+    let result = runner.run(&strategy, |(tris, specs)| {
+        let rays: Vec<Ray> = specs
+            .iter()
+            .filter_map(|&(o, (dx, dy, dz), aim, t_max, t_min)| {
+                let dir = match aim {
+                    Some((index, which)) if !tris.is_empty() => {
+                        let t = tris[index.index(tris.len())];
+                        let target = match which {
+                            0 => t.v0,
+                            1 => t.v1,
+                            2 => t.v2,
+                            3 => 0.5 * (t.v0 + t.v1),
+                            4 => 0.5 * (t.v1 + t.v2),
+                            5 => 0.5 * (t.v2 + t.v0),
+                            _ => (t.v0 + t.v1 + t.v2) / 3.0,
+                        };
+                        target - o
+                    }
+                    _ => Vec3::new(dx, dy, dz),
+                };
+                let r = Ray::with_interval(o, dir, t_min.min(t_max), t_max);
+                r.is_valid().then_some(r)
+            })
+            .collect();
+        check_case::<A>(params, &tris, &rays).map_err(TestCaseError::fail)
+    });
+    if let Err(e) = result {
+        panic!("conformance proptest failed for {}: {e}", A::NAME);
+    }
+}
+
+/// Runs proptest on random sphere scenes (for structures generic over the primitive type).
+///
+/// # Panics
+/// With the shrunk failing case.
+pub fn check_random_spheres<A: Accel<Prim = Sphere>>(params: &A::Params) {
+    let sphere = (
+        prop::array::uniform3(-5.0f32..5.0),
+        prop_oneof![0.01f32..2.0, Just(0.0), Just(f32::NAN)],
+    )
+        .prop_map(|(c, r)| Sphere::new(Vec3::from(c), r));
+    let ray = (
+        prop::array::uniform3(-8.0f32..8.0),
+        prop::array::uniform3(-1.0f32..1.0),
+    );
+    let strategy = (
+        prop::collection::vec(sphere, 0..50),
+        prop::collection::vec(ray, 1..40),
+    );
+    let mut runner = TestRunner::new(Config {
+        failure_persistence: None,
+        ..Config::default()
+    });
+    let result = runner.run(&strategy, |(spheres, rays)| {
+        let rays: Vec<Ray> = rays
+            .into_iter()
+            .map(|(o, d)| Ray::new(Vec3::from(o), Vec3::from(d)))
+            .filter(Ray::is_valid)
+            .collect();
+        check_case::<A>(params, &spheres, &rays).map_err(TestCaseError::fail)
+    });
+    if let Err(e) = result {
+        panic!("conformance sphere proptest failed for {}: {e}", A::NAME);
+    }
+}
+
+/// Runs every adversarial scene and the random-scene proptest; the one call a quick check needs.
+/// Prefer [`conformance_tests!`](crate::conformance_tests), which makes one test per scene.
+///
+/// # Panics
+/// At the first failure.
+pub fn check_all<A: Accel<Prim = Triangle>>(params: &A::Params) {
+    for name in SCENES {
+        check_scene::<A>(params, name);
+    }
+    check_random::<A>(params);
+}
+
+/// Generates a test module with one `#[test]` per adversarial scene and one proptest run, for a
+/// triangle structure type and a parameter expression.
+///
+/// ```ignore
+/// rt_core::conformance_tests!(median, rt_bvh::Bvh<rt_core::Triangle>, rt_bvh::BvhParams::median());
+/// ```
+#[macro_export]
+macro_rules! conformance_tests {
+    ($module:ident, $accel:ty, $params:expr) => {
+        mod $module {
+            #[allow(unused_imports)]
+            use super::*;
+            fn params() -> <$accel as $crate::Accel>::Params {
+                $params
+            }
+            $crate::conformance_tests!(@scenes $accel;
+                empty_scene one_triangle shared_edge identical_triangles equal_centroids
+                zero_area_triangles axis_parallel_rays rays_in_box_faces origins_inside
+                large_coordinates nan_vertex exponential_chain);
+            #[test]
+            fn random_scenes() {
+                $crate::conformance::check_random::<$accel>(&params());
+            }
+        }
+    };
+    (@scenes $accel:ty; $($scene:ident)*) => {
+        $(
+            #[test]
+            fn $scene() {
+                $crate::conformance::check_scene::<$accel>(&params(), stringify!($scene));
+            }
+        )*
+    };
+}
+
+fn random_rays(rng: &mut Rng, lo: Vec3, hi: Vec3, n: usize) -> Vec<Ray> {
+    (0..n)
+        .map(|_| Ray::new(rng.in_box(lo, hi), rng.unit_vector()))
+        .collect()
+}
+
+/// Rays from random origins in `[lo, hi]` towards random points on random triangles, so that a
+/// good share of them hit.
+fn aimed_rays(rng: &mut Rng, tris: &[Triangle], lo: Vec3, hi: Vec3, n: usize) -> Vec<Ray> {
+    let valid: Vec<&Triangle> = tris.iter().filter(|t| t.is_valid()).collect();
+    (0..n)
+        .filter_map(|_| {
+            let t = valid.get(rng.below(valid.len().max(1) as u32) as usize)?;
+            let (a, b) = (rng.f32(), rng.f32());
+            let (a, b) = if a + b > 1.0 {
+                (1.0 - a, 1.0 - b)
+            } else {
+                (a, b)
+            };
+            let target = t.v0 + a * (t.v1 - t.v0) + b * (t.v2 - t.v0);
+            let o = rng.in_box(lo, hi);
+            (target != o).then(|| Ray::new(o, target - o))
+        })
+        .collect()
+}
+
+fn soup(rng: &mut Rng, n: usize, lo: Vec3, hi: Vec3, size: f32) -> Vec<Triangle> {
+    (0..n)
+        .map(|_| {
+            let c = rng.in_box(lo, hi);
+            Triangle::new(
+                c + rng.unit_vector() * size,
+                c + rng.unit_vector() * size,
+                c + rng.unit_vector() * size,
+            )
+        })
+        .collect()
+}
+
+fn one_triangle() -> Scene {
+    let t = Triangle::new(
+        Vec3::new(-1.0, -1.0, 0.0),
+        Vec3::new(1.0, -1.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+    );
+    let mut rays = Vec::new();
+    // A lattice of targets in and around the triangle (vertices and edges included), seen from
+    // both sides.
+    for i in -6..=6 {
+        for j in -6..=6 {
+            let target = Vec3::new(i as f32 / 4.0, j as f32 / 4.0, 0.0);
+            for o in [Vec3::new(0.3, 0.2, 3.0), Vec3::new(-0.5, 0.1, -2.0)] {
+                rays.push(Ray::new(o, target - o));
+            }
+            rays.push(Ray::new(target + Vec3::Z, -Vec3::Z));
+        }
+    }
+    Scene {
+        triangles: vec![t],
+        rays,
+    }
+}
+
+fn shared_edge() -> Scene {
+    // A unit quad split along its diagonal, plus a fan of four triangles sharing a vertex.
+    let q = [
+        Vec3::new(0.0, 0.0, 0.0),
+        Vec3::new(1.0, 0.0, 0.0),
+        Vec3::new(1.0, 1.0, 0.0),
+        Vec3::new(0.0, 1.0, 0.0),
+    ];
+    let c = Vec3::new(3.0, 0.5, 0.0);
+    let fan = [
+        Vec3::new(2.0, 0.0, 0.0),
+        Vec3::new(4.0, 0.0, 0.0),
+        Vec3::new(4.0, 1.0, 0.0),
+        Vec3::new(2.0, 1.0, 0.0),
+    ];
+    let mut triangles = vec![
+        Triangle::new(q[0], q[1], q[2]),
+        Triangle::new(q[0], q[2], q[3]),
+    ];
+    for k in 0..4 {
+        triangles.push(Triangle::new(c, fan[k], fan[(k + 1) % 4]));
+    }
+    let mut rays = Vec::new();
+    let origins = [
+        Vec3::new(0.3, -0.7, 2.0),
+        Vec3::new(-1.0, 2.0, 0.5),
+        Vec3::new(0.5, 0.5, -1.0),
+        Vec3::new(2.5, 3.0, 1.5),
+    ];
+    for i in 0..=32 {
+        let s = i as f32 / 32.0;
+        for target in [
+            Vec3::new(s, s, 0.0),
+            0.5 * (fan[0] + c) + s * (c - fan[0]) * 0.5,
+            c,
+        ] {
+            for o in origins {
+                rays.push(Ray::new(o, target - o));
+            }
+            rays.push(Ray::new(target + Vec3::Z, Vec3::new(0.0, -0.0, -1.0)));
+        }
+    }
+    Scene { triangles, rays }
+}
+
+fn identical_triangles() -> Scene {
+    let t = Triangle::new(
+        Vec3::new(-1.0, -1.0, 0.5),
+        Vec3::new(1.0, -1.0, 0.5),
+        Vec3::new(0.0, 1.0, 0.5),
+    );
+    let mut rng = Rng::new(4);
+    let triangles = vec![t; 1000];
+    let rays = aimed_rays(
+        &mut rng,
+        &triangles,
+        Vec3::splat(-3.0),
+        Vec3::splat(3.0),
+        200,
+    );
+    Scene { triangles, rays }
+}
+
+fn equal_centroids() -> Scene {
+    // 300 triangles of different sizes and orientations, all with their centroid at one point.
+    let mut rng = Rng::new(5);
+    let c = Vec3::new(0.25, -0.5, 1.0);
+    let triangles: Vec<Triangle> = (0..300)
+        .map(|i| {
+            let s = 0.01 + (i % 17) as f32 * 0.1;
+            let a = rng.unit_vector() * s;
+            let b = rng.unit_vector() * s;
+            Triangle::new(c + a, c + b, c - a - b)
+        })
+        .collect();
+    let mut rays = aimed_rays(
+        &mut rng,
+        &triangles,
+        Vec3::splat(-3.0),
+        Vec3::splat(3.0),
+        300,
+    );
+    rays.extend(random_rays(
+        &mut rng,
+        Vec3::splat(-2.0),
+        Vec3::splat(2.0),
+        100,
+    ));
+    Scene { triangles, rays }
+}
+
+fn zero_area_triangles() -> Scene {
+    let mut rng = Rng::new(6);
+    let mut triangles = soup(&mut rng, 100, Vec3::splat(-1.0), Vec3::ONE, 0.4);
+    for i in 0..100 {
+        let p = rng.in_box(Vec3::splat(-1.0), Vec3::ONE);
+        let d = rng.unit_vector() * 0.5;
+        let degenerate = match i % 3 {
+            0 => Triangle::new(p, p, p),
+            1 => Triangle::new(p, p + d, p + 2.0 * d),
+            _ => Triangle::new(p, p + d, p),
+        };
+        triangles.insert(2 * i, degenerate);
+    }
+    let mut rays = aimed_rays(
+        &mut rng,
+        &triangles,
+        Vec3::splat(-2.0),
+        Vec3::splat(2.0),
+        300,
+    );
+    // Rays straight at the degenerate ones.
+    for t in triangles.iter().filter(|t| !t.is_valid()).take(50) {
+        let o = rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0));
+        if o != t.v1 {
+            rays.push(Ray::new(o, t.v1 - o));
+        }
+    }
+    Scene { triangles, rays }
+}
+
+/// Triangles on a half-unit lattice, hit by rays along the axes whose other direction
+/// components are `+0.0` or `-0.0` and whose origins lie on lattice planes, where the slab
+/// test sees `0 · inf`.
+fn axis_parallel_rays() -> Scene {
+    let mut triangles = Vec::new();
+    let mut rng = Rng::new(7);
+    let lattice = |r: &mut Rng| (r.below(9) as f32 - 4.0) * 0.5;
+    for _ in 0..150 {
+        let p = |r: &mut Rng| Vec3::new(lattice(r), lattice(r), lattice(r));
+        let t = Triangle::new(p(&mut rng), p(&mut rng), p(&mut rng));
+        if t.is_valid() {
+            triangles.push(t);
+        }
+    }
+    let mut rays = Vec::new();
+    for axis in 0..3 {
+        for sign in [1.0f32, -1.0] {
+            for zero in [0.0f32, -0.0] {
+                for _ in 0..60 {
+                    let mut o = Vec3::new(lattice(&mut rng), lattice(&mut rng), lattice(&mut rng));
+                    if rng.below(2) == 0 {
+                        o[(axis + 1) % 3] += 0.25;
+                    }
+                    o[axis] = -3.0 * sign;
+                    let mut d = Vec3::splat(zero);
+                    d[axis] = sign;
+                    rays.push(Ray::new(o, d));
+                }
+            }
+        }
+    }
+    Scene { triangles, rays }
+}
+
+/// Tilted triangles whose boxes share face planes (x, y, z in {-1, 0, 1}), and rays lying
+/// exactly in those planes.
+fn rays_in_box_faces() -> Scene {
+    let mut rng = Rng::new(8);
+    let planes = [-1.0f32, 0.0, 1.0];
+    let mut triangles = Vec::new();
+    for axis in 0..3 {
+        for &p in &planes {
+            for _ in 0..12 {
+                // One vertex on the plane, the others on one side of it: the plane is a box face.
+                let mut a = rng.in_box(Vec3::splat(-1.5), Vec3::splat(1.5));
+                a[axis] = p;
+                let side = if rng.below(2) == 0 { 1.0 } else { -1.0 };
+                let mut b = rng.in_box(Vec3::splat(-1.5), Vec3::splat(1.5));
+                b[axis] = p + side * rng.range(0.1, 0.5);
+                let mut c = rng.in_box(Vec3::splat(-1.5), Vec3::splat(1.5));
+                c[axis] = p + side * rng.range(0.1, 0.5);
+                triangles.push(Triangle::new(a, b, c));
+                // And an edge lying in the plane.
+                let mut d = rng.in_box(Vec3::splat(-1.5), Vec3::splat(1.5));
+                d[axis] = p;
+                triangles.push(Triangle::new(a, d, b));
+            }
+        }
+    }
+    let mut rays = Vec::new();
+    for t in &triangles {
+        for axis in 0..3 {
+            for zero in [0.0f32, -0.0] {
+                // A ray in the plane `axis = v0[axis]` aimed through v0 from outside.
+                let mut o = rng.in_box(Vec3::splat(-3.0), Vec3::splat(3.0));
+                o[axis] = t.v0[axis];
+                let mut d = t.v0 - o;
+                d[axis] = zero;
+                if d != Vec3::ZERO {
+                    rays.push(Ray::new(o, d));
+                }
+            }
+        }
+    }
+    Scene { triangles, rays }
+}
+
+fn origins_inside() -> Scene {
+    let mut rng = Rng::new(9);
+    let triangles = soup(&mut rng, 500, Vec3::splat(-1.0), Vec3::ONE, 0.3);
+    let mut rays = random_rays(&mut rng, Vec3::splat(-1.0), Vec3::ONE, 300);
+    rays.extend(aimed_rays(
+        &mut rng,
+        &triangles,
+        Vec3::splat(-0.5),
+        Vec3::splat(0.5),
+        300,
+    ));
+    // Origins exactly on triangle vertices and in the middle of triangles.
+    for t in triangles.iter().take(100) {
+        rays.push(Ray::new(t.v0, rng.unit_vector()));
+        rays.push(Ray::new((t.v0 + t.v1 + t.v2) / 3.0, rng.unit_vector()));
+    }
+    Scene { triangles, rays }
+}
+
+fn large_coordinates() -> Scene {
+    // Small triangles far from the origin (where a float's spacing is ~1) and a scene spanning
+    // ±1e8: the box tests must stay conservative when rounding is coarse.
+    let mut rng = Rng::new(10);
+    let far = Vec3::new(3.0e7, -2.0e7, 1.0e7);
+    let mut triangles = soup(
+        &mut rng,
+        200,
+        far - Vec3::splat(500.0),
+        far + Vec3::splat(500.0),
+        60.0,
+    );
+    triangles.extend(soup(
+        &mut rng,
+        200,
+        Vec3::splat(-1.0e8),
+        Vec3::splat(1.0e8),
+        2.0e7,
+    ));
+    let mut rays = aimed_rays(
+        &mut rng,
+        &triangles[..200],
+        far - Vec3::splat(2000.0),
+        far + Vec3::splat(2000.0),
+        300,
+    );
+    rays.extend(aimed_rays(
+        &mut rng,
+        &triangles[200..],
+        Vec3::splat(-2.0e8),
+        Vec3::splat(2.0e8),
+        300,
+    ));
+    Scene { triangles, rays }
+}
+
+fn nan_vertex() -> Scene {
+    let mut rng = Rng::new(11);
+    let mut triangles = soup(&mut rng, 300, Vec3::splat(-1.0), Vec3::ONE, 0.3);
+    let bad = [
+        Triangle::new(Vec3::ZERO, Vec3::new(f32::NAN, 0.0, 0.0), Vec3::Y),
+        Triangle::new(
+            Vec3::splat(f32::NAN),
+            Vec3::splat(f32::NAN),
+            Vec3::splat(f32::NAN),
+        ),
+        Triangle::new(Vec3::ZERO, Vec3::new(f32::INFINITY, 0.0, 0.0), Vec3::Y),
+        Triangle::new(Vec3::new(0.0, f32::NEG_INFINITY, 1.0), Vec3::X, Vec3::Y),
+    ];
+    for (k, t) in bad.into_iter().enumerate() {
+        triangles.insert(37 * k + 1, t);
+    }
+    let mut rays = aimed_rays(
+        &mut rng,
+        &triangles,
+        Vec3::splat(-2.0),
+        Vec3::splat(2.0),
+        400,
+    );
+    rays.extend(random_rays(&mut rng, Vec3::splat(-1.0), Vec3::ONE, 100));
+    // Rays through where the bad triangles would be if NaN were treated as a number.
+    rays.push(Ray::new(Vec3::new(0.1, 0.1, 3.0), -Vec3::Z));
+    rays.push(Ray::new(Vec3::new(0.1, 0.1, -3.0), Vec3::Z));
+    Scene { triangles, rays }
+}
+
+/// 120 parallel triangles at `x = 1.5^k`: every builder that splits space or centroids in the
+/// middle peels off one triangle per level, so the tree is as deep as its builder allows, and a
+/// traversal stack must not overflow.
+fn exponential_chain() -> Scene {
+    let mut triangles = Vec::new();
+    for k in 0..120 {
+        let x = 1.5f32.powi(k);
+        let s = 1.0 + k as f32 * 0.01;
+        triangles.push(Triangle::new(
+            Vec3::new(x, -s, -s),
+            Vec3::new(x, s, -s),
+            Vec3::new(x, 0.0, s),
+        ));
+    }
+    let mut rng = Rng::new(12);
+    let mut rays = Vec::new();
+    for _ in 0..100 {
+        let o = Vec3::new(0.0, rng.range(-0.5, 0.5), rng.range(-0.5, 0.5));
+        rays.push(Ray::new(o, Vec3::X));
+        let far = Vec3::new(1.5f32.powi(121), o.y, o.z);
+        rays.push(Ray::new(far, -Vec3::X));
+        rays.push(Ray::new(o, Vec3::new(1.0, rng.range(-1e-9, 1e-9), 0.0)));
+    }
+    let hi = Vec3::new(1.5f32.powi(120), 2.0, 2.0);
+    rays.extend(aimed_rays(&mut rng, &triangles, Vec3::splat(-2.0), hi, 200));
+    Scene { triangles, rays }
+}

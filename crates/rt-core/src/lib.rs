@@ -1,0 +1,62 @@
+//! Shared foundation of the `rt-accel` workspace: rays, boxes, primitives, the [`Accel`] trait
+//! every acceleration structure implements, traversal [`Stats`], the [`BruteForce`] reference,
+//! meshes and OBJ loading, built-in scenes, ray generation, and (feature `conformance`) the
+//! conformance kit that checks any structure against brute force.
+//!
+//! # Using a structure
+//! Structures live in their own crates (`rt-bvh`, ...) and all follow [`Accel`]:
+//!
+//! ```
+//! use rt_core::{Accel, BruteForce, Ray, Triangle, glam::Vec3};
+//!
+//! let tris = vec![
+//!     Triangle::new(Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)),
+//!     Triangle::new(Vec3::new(-1.0, -1.0, 2.0), Vec3::new(1.0, -1.0, 2.0), Vec3::new(0.0, 1.0, 2.0)),
+//! ];
+//! let accel = BruteForce::build(&tris, &Default::default());
+//! let ray = Ray::new(Vec3::new(0.0, 0.0, -5.0), Vec3::Z);
+//! let hit = accel.intersect(&ray).expect("the ray hits the first triangle");
+//! assert_eq!((hit.prim, hit.t), (0, 5.0));
+//! assert!(accel.occluded(&ray));
+//! ```
+//!
+//! # Conventions
+//! - A hit is the smallest `t` in the ray's closed interval `[t_min, t_max]`; equal `t` goes to
+//!   the smaller primitive index ([`Hit::beats`]). The answer is unique, so structures can be
+//!   compared exactly.
+//! - Invalid primitives (non-finite, zero-area; [`Primitive::is_valid`]) are never hit.
+//! - Nothing here panics on bad geometry or bad files: loaders return typed errors naming the
+//!   file and line.
+#![warn(missing_docs)]
+
+mod aabb;
+mod accel;
+mod brute;
+mod mesh;
+mod obj;
+mod primitive;
+mod ray;
+pub mod raygen;
+mod rng;
+pub mod scenes;
+mod sphere;
+mod stats;
+mod triangle;
+
+#[cfg(feature = "conformance")]
+pub mod conformance;
+
+pub use aabb::{Aabb, SLAB_FAR_SCALE};
+pub use accel::{Accel, BuildStats, Hit};
+pub use brute::BruteForce;
+pub use mesh::{IndexOutOfRange, Mesh};
+pub use obj::{LoadError, LoadErrorKind, load_obj, load_obj_bytes};
+pub use primitive::{PrimHit, Primitive};
+pub use ray::Ray;
+pub use rng::Rng;
+pub use sphere::Sphere;
+pub use stats::{Counters, NoStats, Stats};
+pub use triangle::{MtTriangle, Triangle};
+
+/// Re-exported so users name the same `Vec3` the library uses.
+pub use glam;

@@ -1,0 +1,519 @@
+//! Loading Wavefront OBJ files into a [`Mesh`].
+//!
+//! The geometry is parsed by `tobj`. Before `tobj` sees the text, one pass over the lines checks
+//! everything `tobj` would trip on or report without a line number: numbers that do not parse,
+//! non-finite coordinates, faces with fewer than three vertices, and vertex, texture and normal
+//! indices that are zero or out of range (`tobj` 4.0.5 can panic in debug builds on some of
+//! those). Errors therefore name the file and the line. As a last safety net the `tobj` call also
+//! runs under `catch_unwind`, so even an unforeseen panic inside it becomes a [`LoadError`].
+//!
+//! Polygons with more than three vertices are triangulated by ear clipping in the polygon's
+//! plane, so concave polygons come out right (a fan would not).
+
+use crate::Mesh;
+use glam::{Vec2, Vec3};
+use std::fmt;
+use std::io::Cursor;
+use std::path::{Path, PathBuf};
+
+/// What went wrong while loading a mesh.
+#[derive(Clone, Debug, PartialEq)]
+pub enum LoadErrorKind {
+    /// The file could not be read.
+    Io(String),
+    /// The bytes are not UTF-8 (nor UTF-16 with a byte-order mark).
+    Encoding,
+    /// A line does not follow the OBJ syntax.
+    Malformed(String),
+    /// A face refers to an element that does not exist (indices start at 1; negative indices
+    /// count back from the last element defined so far).
+    IndexOutOfRange {
+        /// `"vertex"`, `"texture coordinate"` or `"normal"`.
+        element: &'static str,
+        /// The index as written.
+        index: i64,
+        /// How many such elements were defined before this line.
+        defined: usize,
+    },
+    /// A vertex coordinate is NaN or infinite.
+    NonFinite,
+    /// The file holds no triangles (it may hold only points or lines).
+    NoTriangles,
+    /// The OBJ parser rejected the file for a reason the validation pass did not foresee.
+    Parser(String),
+}
+
+/// An error loading a scene file: which file, which line (when one is to blame), and what.
+#[derive(Clone, Debug, PartialEq)]
+pub struct LoadError {
+    /// The file.
+    pub path: PathBuf,
+    /// The 1-based line, when the problem is on one line.
+    pub line: Option<usize>,
+    /// What is wrong.
+    pub kind: LoadErrorKind,
+}
+
+impl fmt::Display for LoadError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.path.display())?;
+        if let Some(line) = self.line {
+            write!(f, ":{line}")?;
+        }
+        match &self.kind {
+            LoadErrorKind::Io(e) => write!(f, ": cannot read file: {e}"),
+            LoadErrorKind::Encoding => write!(f, ": not UTF-8 or UTF-16 text"),
+            LoadErrorKind::Malformed(what) => write!(f, ": malformed line: {what}"),
+            LoadErrorKind::IndexOutOfRange {
+                element,
+                index,
+                defined,
+            } => write!(
+                f,
+                ": {element} index {index} out of range ({defined} defined before this line)"
+            ),
+            LoadErrorKind::NonFinite => write!(f, ": vertex coordinate is NaN or infinite"),
+            LoadErrorKind::NoTriangles => write!(f, ": no triangles in the file"),
+            LoadErrorKind::Parser(e) => write!(f, ": OBJ parser error: {e}"),
+        }
+    }
+}
+
+impl std::error::Error for LoadError {}
+
+/// Loads the triangles of an OBJ file (all objects and groups merged into one mesh).
+///
+/// # Errors
+/// A [`LoadError`] naming the file, and the line where one is to blame, for a missing or
+/// unreadable file, text that is neither UTF-8 nor UTF-16, a malformed line, an index out of
+/// range, a non-finite coordinate, or a file without triangles. Never panics.
+///
+/// ```
+/// let err = rt_core::load_obj("no/such/file.obj").unwrap_err();
+/// assert!(err.to_string().starts_with("no/such/file.obj: cannot read file"));
+/// ```
+pub fn load_obj(path: impl AsRef<Path>) -> Result<Mesh, LoadError> {
+    let path = path.as_ref();
+    let bytes = std::fs::read(path).map_err(|e| LoadError {
+        path: path.to_owned(),
+        line: None,
+        kind: LoadErrorKind::Io(e.to_string()),
+    })?;
+    parse_obj(&bytes).map_err(|(line, kind)| LoadError {
+        path: path.to_owned(),
+        line,
+        kind,
+    })
+}
+
+/// Loads OBJ text from memory; `name` is used in errors in place of a path.
+///
+/// # Errors
+/// As [`load_obj`], except that nothing is read from disk.
+pub fn load_obj_bytes(name: &str, bytes: &[u8]) -> Result<Mesh, LoadError> {
+    parse_obj(bytes).map_err(|(line, kind)| LoadError {
+        path: name.into(),
+        line,
+        kind,
+    })
+}
+
+type ParseResult<T> = Result<T, (Option<usize>, LoadErrorKind)>;
+
+fn parse_obj(bytes: &[u8]) -> ParseResult<Mesh> {
+    let text = decode(bytes)?;
+    validate(&text)?;
+    let options = tobj::LoadOptions {
+        triangulate: false,
+        single_index: false,
+        ignore_points: true,
+        ignore_lines: true,
+        ..Default::default()
+    };
+    let loaded = std::panic::catch_unwind(|| {
+        tobj::load_obj_buf(&mut Cursor::new(text.as_bytes()), &options, |_| {
+            // Materials are irrelevant to geometry; a missing .mtl file is not an error here.
+            Ok(Default::default())
+        })
+    });
+    let models = match loaded {
+        Ok(Ok((models, _))) => models,
+        Ok(Err(e)) => return Err((None, LoadErrorKind::Parser(e.to_string()))),
+        Err(_) => {
+            return Err((
+                None,
+                LoadErrorKind::Parser("the OBJ parser panicked".into()),
+            ));
+        }
+    };
+
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    for model in &models {
+        let m = &model.mesh;
+        let base = positions.len() as u32;
+        positions.extend(
+            m.positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2])),
+        );
+        let local = &positions[base as usize..];
+        let arities: Vec<u32> = if m.face_arities.is_empty() {
+            vec![3; m.indices.len() / 3]
+        } else {
+            m.face_arities.clone()
+        };
+        let mut start = 0usize;
+        for arity in arities {
+            let Some(face) = m.indices.get(start..start + arity as usize) else {
+                return Err((
+                    None,
+                    LoadErrorKind::Parser("face list shorter than its arities".into()),
+                ));
+            };
+            start += arity as usize;
+            if face.iter().any(|&i| i as usize >= local.len()) {
+                return Err((
+                    None,
+                    LoadErrorKind::Parser("face index outside its object".into()),
+                ));
+            }
+            triangulate(face, local, |t| indices.push(t.map(|i| i + base)));
+        }
+    }
+    if indices.is_empty() {
+        return Err((None, LoadErrorKind::NoTriangles));
+    }
+    Mesh::new(positions, indices).map_err(|e| (None, LoadErrorKind::Parser(e.to_string())))
+}
+
+/// UTF-8 (with or without a byte-order mark), or UTF-16 of either byte order with a mark.
+fn decode(bytes: &[u8]) -> ParseResult<String> {
+    let utf16 = |be: bool| {
+        let units = bytes[2..]
+            .chunks(2)
+            .map(|c| {
+                if c.len() == 2 {
+                    Ok([c[0], c[1]])
+                } else {
+                    Err((None, LoadErrorKind::Encoding))
+                }
+            })
+            .map(|c| {
+                c.map(|c| {
+                    if be {
+                        u16::from_be_bytes(c)
+                    } else {
+                        u16::from_le_bytes(c)
+                    }
+                })
+            })
+            .collect::<Result<Vec<u16>, _>>()?;
+        String::from_utf16(&units).map_err(|_| (None, LoadErrorKind::Encoding))
+    };
+    match bytes {
+        [0xFE, 0xFF, ..] => utf16(true),
+        [0xFF, 0xFE, ..] => utf16(false),
+        [0xEF, 0xBB, 0xBF, rest @ ..] => utf8(rest),
+        _ => utf8(bytes),
+    }
+}
+
+fn utf8(bytes: &[u8]) -> ParseResult<String> {
+    String::from_utf8(bytes.to_vec()).map_err(|e| {
+        let line = 1 + bytes[..e.utf8_error().valid_up_to()]
+            .iter()
+            .filter(|&&b| b == b'\n')
+            .count();
+        (Some(line), LoadErrorKind::Encoding)
+    })
+}
+
+/// The validation pass: finds, with its line number, everything the parser would reject or
+/// mishandle. Mirrors the OBJ rules `tobj` applies: `v` needs three numbers, `vt` two, `vn`
+/// three; face indices are 1-based or negative (relative to the elements defined so far).
+fn validate(text: &str) -> ParseResult<()> {
+    let mut counts = [0usize; 3]; // vertices, texture coordinates, normals
+    for (n, line) in text.lines().enumerate() {
+        let line_no = Some(n + 1);
+        let err = |kind| Err((line_no, kind));
+        let mut words = line.split_whitespace();
+        let Some(keyword) = words.next() else {
+            continue;
+        };
+        let numbers = |need: usize, what: &str| -> ParseResult<Vec<f32>> {
+            let vals = words
+                .clone()
+                .take(need)
+                .map(|w| w.parse::<f32>().map_err(|_| w))
+                .collect::<Result<Vec<_>, _>>()
+                .map_err(|w| {
+                    (
+                        line_no,
+                        LoadErrorKind::Malformed(format!("`{w}` is not a number")),
+                    )
+                })?;
+            if vals.len() < need {
+                return Err((
+                    line_no,
+                    LoadErrorKind::Malformed(format!(
+                        "{what} needs {need} numbers, found {}",
+                        vals.len()
+                    )),
+                ));
+            }
+            Ok(vals)
+        };
+        match keyword {
+            "v" => {
+                if numbers(3, "a vertex")?.iter().any(|x| !x.is_finite()) {
+                    return err(LoadErrorKind::NonFinite);
+                }
+                counts[0] += 1;
+            }
+            "vt" => {
+                numbers(2, "a texture coordinate")?;
+                counts[1] += 1;
+            }
+            "vn" => {
+                numbers(3, "a normal")?;
+                counts[2] += 1;
+            }
+            "f" => {
+                let corners: Vec<&str> = words.collect();
+                if corners.len() < 3 {
+                    return err(LoadErrorKind::Malformed(format!(
+                        "a face needs at least 3 vertices, found {}",
+                        corners.len()
+                    )));
+                }
+                for corner in corners {
+                    let parts: Vec<&str> = corner.split('/').collect();
+                    if parts.len() > 3 || parts[0].is_empty() {
+                        return err(LoadErrorKind::Malformed(format!(
+                            "bad face vertex `{corner}`"
+                        )));
+                    }
+                    const ELEMENTS: [&str; 3] = ["vertex", "texture coordinate", "normal"];
+                    for (k, part) in parts.iter().enumerate() {
+                        if part.is_empty() {
+                            continue;
+                        }
+                        let Ok(index) = part.parse::<i64>() else {
+                            return err(LoadErrorKind::Malformed(format!(
+                                "bad face vertex `{corner}`"
+                            )));
+                        };
+                        let defined = counts[k];
+                        let ok = if index > 0 {
+                            index as u64 <= defined as u64
+                        } else {
+                            index < 0 && index.unsigned_abs() <= defined as u64
+                        };
+                        if !ok {
+                            return err(LoadErrorKind::IndexOutOfRange {
+                                element: ELEMENTS[k],
+                                index,
+                                defined,
+                            });
+                        }
+                    }
+                }
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}
+
+/// Splits one polygon into triangles by ear clipping in the plane of its Newell normal.
+///
+/// Degenerate polygons (no normal) and very large ones, where ear clipping's quadratic passes
+/// would cost too much, fall back to a fan. When no ear is found (self-intersecting input), the
+/// first remaining corner is clipped anyway, so the loop always ends after `n - 2` triangles.
+fn triangulate(face: &[u32], pos: &[Vec3], mut emit: impl FnMut([u32; 3])) {
+    const EAR_CLIPPING_LIMIT: usize = 256;
+    let n = face.len();
+    if n == 3 {
+        emit([face[0], face[1], face[2]]);
+        return;
+    }
+    let p = |i: u32| pos[i as usize];
+    let mut normal = Vec3::ZERO;
+    for k in 0..n {
+        let (a, b) = (p(face[k]), p(face[(k + 1) % n]));
+        normal += Vec3::new(
+            (a.y - b.y) * (a.z + b.z),
+            (a.z - b.z) * (a.x + b.x),
+            (a.x - b.x) * (a.y + b.y),
+        );
+    }
+    if normal == Vec3::ZERO || !normal.is_finite() || n > EAR_CLIPPING_LIMIT {
+        for k in 1..n - 1 {
+            emit([face[0], face[k], face[k + 1]]);
+        }
+        return;
+    }
+    // Drop the dominant axis; flip one kept axis if needed so the polygon winds counter-clockwise.
+    let a = normal.abs();
+    let (ax, ay, sign) = if a.x >= a.y && a.x >= a.z {
+        (1, 2, normal.x)
+    } else if a.y >= a.z {
+        (2, 0, normal.y)
+    } else {
+        (0, 1, normal.z)
+    };
+    let flat: Vec<Vec2> = face
+        .iter()
+        .map(|&i| Vec2::new(p(i)[ax], if sign < 0.0 { -p(i)[ay] } else { p(i)[ay] }))
+        .collect();
+    let cross = |o: Vec2, a: Vec2, b: Vec2| (a - o).perp_dot(b - o);
+    let mut ring: Vec<usize> = (0..n).collect();
+    while ring.len() > 3 {
+        let m = ring.len();
+        let is_ear = |k: usize| {
+            let (i0, i1, i2) = (ring[(k + m - 1) % m], ring[k], ring[(k + 1) % m]);
+            let (a, b, c) = (flat[i0], flat[i1], flat[i2]);
+            if cross(a, b, c) <= 0.0 {
+                return false;
+            }
+            ring.iter().all(|&j| {
+                j == i0 || j == i1 || j == i2 || {
+                    let q = flat[j];
+                    !(cross(a, b, q) >= 0.0 && cross(b, c, q) >= 0.0 && cross(c, a, q) >= 0.0)
+                }
+            })
+        };
+        let k = (0..m).find(|&k| is_ear(k)).unwrap_or(0);
+        emit([
+            face[ring[(k + m - 1) % m]],
+            face[ring[k]],
+            face[ring[(k + 1) % m]],
+        ]);
+        ring.remove(k);
+    }
+    emit([face[ring[0]], face[ring[1]], face[ring[2]]]);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Triangle;
+
+    fn load(text: &str) -> Result<Mesh, LoadError> {
+        load_obj_bytes("test.obj", text.as_bytes())
+    }
+
+    #[test]
+    fn loads_triangles_and_quads() {
+        let m = load("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 2 3 4\n").unwrap();
+        assert_eq!(m.triangle_count(), 3);
+        assert_eq!(m.positions().len(), 4);
+    }
+
+    #[test]
+    fn negative_indices_and_slashes() {
+        let m =
+            load("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nf -3/1/1 -2//1 -1/-1/-1\n").unwrap();
+        assert_eq!(m.triangle(0), Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y));
+    }
+
+    #[test]
+    fn errors_name_file_and_line() {
+        let e = load("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 4\n").unwrap_err();
+        assert_eq!(e.line, Some(4));
+        assert_eq!(
+            e.kind,
+            LoadErrorKind::IndexOutOfRange {
+                element: "vertex",
+                index: 4,
+                defined: 3
+            }
+        );
+        assert_eq!(
+            e.to_string(),
+            "test.obj:4: vertex index 4 out of range (3 defined before this line)"
+        );
+
+        let e = load("v 0 0 0\nv 1 0 zero\n").unwrap_err();
+        assert_eq!(
+            (e.line, e.to_string().contains("`zero` is not a number")),
+            (Some(2), true)
+        );
+
+        let e = load("v 0 0 0\nv 1 0 NaN\n").unwrap_err();
+        assert_eq!((e.line, e.kind), (Some(2), LoadErrorKind::NonFinite));
+
+        let e = load("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 0 1 2\n").unwrap_err();
+        assert_eq!(e.line, Some(4));
+
+        let e = load("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3/1\n").unwrap_err();
+        assert!(matches!(
+            e.kind,
+            LoadErrorKind::IndexOutOfRange {
+                element: "texture coordinate",
+                ..
+            }
+        ));
+
+        let e = load("v 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 -3/1/-7\n").unwrap_err();
+        assert_eq!(e.line, Some(4));
+
+        let e = load("v 0 0 0\nf\n").unwrap_err();
+        assert_eq!(e.line, Some(2));
+
+        let e = load("v 0 0 0\nv 1 0 0\nl 1 2\n").unwrap_err();
+        assert_eq!((e.line, e.kind), (None, LoadErrorKind::NoTriangles));
+
+        let e = load("").unwrap_err();
+        assert_eq!(e.kind, LoadErrorKind::NoTriangles);
+
+        let e = load_obj_bytes("x.obj", b"v 0 0 0\n\xff\xfe\xfd\n").unwrap_err();
+        assert_eq!((e.line, e.kind), (Some(2), LoadErrorKind::Encoding));
+    }
+
+    #[test]
+    fn utf16_with_bom_is_decoded() {
+        let text = "v 0 0 0\r\nv 1 0 0\r\nv 0 1 0\r\nf 1 2 3\r\n";
+        let mut be = vec![0xFE, 0xFF];
+        let mut le = vec![0xFF, 0xFE];
+        for u in text.encode_utf16() {
+            be.extend(u.to_be_bytes());
+            le.extend(u.to_le_bytes());
+        }
+        assert_eq!(load_obj_bytes("be", &be).unwrap().triangle_count(), 1);
+        assert_eq!(load_obj_bytes("le", &le).unwrap().triangle_count(), 1);
+    }
+
+    #[test]
+    fn concave_polygon_is_ear_clipped() {
+        // An L-shaped hexagon: a fan from corner 0 would put a triangle outside the L.
+        let text = "v 0 0 0\nv 2 0 0\nv 2 1 0\nv 1 1 0\nv 1 2 0\nv 0 2 0\nf 1 2 3 4 5 6\n";
+        let m = load(text).unwrap();
+        assert_eq!(m.triangle_count(), 4);
+        let area: f32 = m
+            .triangles()
+            .iter()
+            .map(|t| t.normal().length() * 0.5)
+            .sum();
+        assert!((area - 3.0).abs() < 1e-6, "area {area}");
+        // Every triangle's centroid lies inside the L (not in the missing square [1,2]x[1,2]).
+        for t in m.triangles() {
+            let c = (t.v0 + t.v1 + t.v2) / 3.0;
+            assert!(
+                !(c.x > 1.0 && c.y > 1.0),
+                "triangle outside the polygon: {t:?}"
+            );
+        }
+    }
+
+    #[test]
+    fn degenerate_polygon_does_not_loop() {
+        let mut text = String::from("v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf");
+        for _ in 0..300 {
+            text.push_str(" 1 2 3 4");
+        }
+        text.push('\n');
+        assert_eq!(load(&text).unwrap().triangle_count(), 1198);
+    }
+}

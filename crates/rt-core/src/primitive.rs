@@ -1,0 +1,54 @@
+//! The small trait that makes structures generic over what they store.
+
+use crate::{Aabb, Ray};
+use glam::Vec3;
+use std::fmt::Debug;
+
+/// Where a ray meets one primitive: the ray parameter and two surface coordinates.
+///
+/// For triangles `u` and `v` are the barycentric weights of the second and third vertex (the hit
+/// point is `(1 - u - v)·v0 + u·v1 + v·v2`); for spheres they are longitude and colatitude, each
+/// scaled to `[0, 1]`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct PrimHit {
+    /// The ray parameter of the hit.
+    pub t: f32,
+    /// First surface coordinate.
+    pub u: f32,
+    /// Second surface coordinate.
+    pub v: f32,
+}
+
+/// A geometric primitive that acceleration structures can store and intersect.
+///
+/// Structures use [`bounds`](Primitive::bounds) and [`centroid`](Primitive::centroid) while
+/// building and [`intersect`](Primitive::intersect) while tracing; the intersect call is the
+/// "primitive test" that [`Stats`](crate::Stats) counts.
+pub trait Primitive: Clone + Send + Sync + Debug + 'static {
+    /// The smallest axis-aligned box holding the primitive.
+    fn bounds(&self) -> Aabb;
+
+    /// A representative point used to sort primitives into halves; the box centre by default.
+    #[inline]
+    fn centroid(&self) -> Vec3 {
+        self.bounds().center()
+    }
+
+    /// Whether the primitive can ever be hit: finite coordinates and a non-degenerate shape.
+    ///
+    /// Every structure, and [`BruteForce`](crate::BruteForce), leaves invalid primitives out at
+    /// build time, so a triangle with a NaN vertex is never reported and never widens a box.
+    fn is_valid(&self) -> bool;
+
+    /// The hit with `ray.t_min <= t <= t_max`, if any. Both ends are inclusive so that a structure
+    /// that shrinks `t_max` to the closest hit so far still finds an equally close hit on a
+    /// primitive with a smaller index (the tie rule of [`Accel`](crate::Accel)).
+    fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit>;
+
+    /// Whether the ray meets the primitive within `ray.t_min ..= t_max`. Defaults to
+    /// [`intersect`](Primitive::intersect); primitives may skip computing surface coordinates.
+    #[inline]
+    fn occludes(&self, ray: &Ray, t_max: f32) -> bool {
+        self.intersect(ray, t_max).is_some()
+    }
+}

@@ -1,0 +1,106 @@
+//! Rays with a parametric interval and a precomputed reciprocal direction.
+
+use glam::Vec3;
+
+/// A ray `origin + t * dir` restricted to the closed interval `t_min ..= t_max`.
+///
+/// The reciprocal direction is computed once at construction so that every slab test is three
+/// multiplications instead of three divisions. A zero direction component gives an infinite
+/// reciprocal whose sign follows the zero's sign (`1 / -0.0 == -inf`); [`Aabb::intersect`]
+/// relies on that sign to choose the near and far slab planes.
+///
+/// The direction need not be normalized: `t` is measured in units of `dir`.
+///
+/// [`Aabb::intersect`]: crate::Aabb::intersect
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Ray {
+    /// Where the ray starts (at `t = 0`).
+    pub origin: Vec3,
+    /// The direction; need not be normalized.
+    pub dir: Vec3,
+    /// Component-wise `1 / dir`, with signed infinities for zero components.
+    pub inv_dir: Vec3,
+    /// Hits with `t < t_min` are ignored.
+    pub t_min: f32,
+    /// Hits with `t > t_max` are ignored.
+    pub t_max: f32,
+}
+
+impl Ray {
+    /// A ray over `[0, +inf]`.
+    ///
+    /// ```
+    /// use rt_core::{Ray, glam::Vec3};
+    /// let r = Ray::new(Vec3::ZERO, Vec3::new(0.0, -0.0, 2.0));
+    /// assert_eq!(r.inv_dir.y, f32::NEG_INFINITY);
+    /// assert_eq!(r.at(1.5), Vec3::new(0.0, 0.0, 3.0));
+    /// ```
+    #[inline]
+    pub fn new(origin: Vec3, dir: Vec3) -> Self {
+        Self::with_interval(origin, dir, 0.0, f32::INFINITY)
+    }
+
+    /// A ray over `[t_min, t_max]`.
+    #[inline]
+    pub fn with_interval(origin: Vec3, dir: Vec3, t_min: f32, t_max: f32) -> Self {
+        Self {
+            origin,
+            dir,
+            inv_dir: dir.recip(),
+            t_min,
+            t_max,
+        }
+    }
+
+    /// The point at parameter `t`.
+    #[inline]
+    pub fn at(&self, t: f32) -> Vec3 {
+        self.origin + t * self.dir
+    }
+
+    /// Whether origin, direction and interval are usable: all finite except `t_max`, which may be
+    /// `+inf`; a non-zero direction; and `t_min <= t_max`.
+    ///
+    /// Structures do not check this on every ray (it would cost time on the hot path); loaders of
+    /// ray files and ray generators do.
+    pub fn is_valid(&self) -> bool {
+        self.origin.is_finite()
+            && self.dir.is_finite()
+            && self.dir != Vec3::ZERO
+            && self.t_min.is_finite()
+            && !self.t_max.is_nan()
+            && self.t_min <= self.t_max
+    }
+
+    /// Formats the ray as one line of a rays file (`ox oy oz dx dy dz tmin tmax`), with every
+    /// float printed so that it parses back to the same bits.
+    pub fn to_line(&self) -> String {
+        let o = self.origin;
+        let d = self.dir;
+        format!(
+            "{:?} {:?} {:?} {:?} {:?} {:?} {:?} {:?}",
+            o.x, o.y, o.z, d.x, d.y, d.z, self.t_min, self.t_max
+        )
+    }
+
+    /// Formats the ray as Rust source that rebuilds it exactly, for pasting into a test.
+    pub fn to_rust(&self) -> String {
+        let o = self.origin;
+        let d = self.dir;
+        format!(
+            "Ray::with_interval(Vec3::new({:?}, {:?}, {:?}), Vec3::new({:?}, {:?}, {:?}), {:?}, {})",
+            o.x,
+            o.y,
+            o.z,
+            d.x,
+            d.y,
+            d.z,
+            self.t_min,
+            if self.t_max.is_infinite() {
+                "f32::INFINITY".to_string()
+            } else {
+                format!("{:?}", self.t_max)
+            }
+        )
+    }
+}

@@ -1,0 +1,218 @@
+//! Ray sets for measuring structures: primary (camera), incoherent and shadow rays, and the
+//! rays-file format used to replay them.
+
+use crate::{Aabb, Hit, Ray, Rng};
+use glam::Vec3;
+use std::fmt;
+use std::path::Path;
+
+/// A pinhole camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Camera {
+    /// Eye position.
+    pub eye: Vec3,
+    /// Point the camera looks at.
+    pub target: Vec3,
+    /// Approximate up direction.
+    pub up: Vec3,
+    /// Vertical field of view in degrees.
+    pub vfov_deg: f32,
+}
+
+impl Camera {
+    /// A camera that sees the whole box from the front (+z), slightly from above, with a 40°
+    /// vertical field of view.
+    pub fn framing(bounds: &Aabb) -> Self {
+        let vfov_deg = 40.0f32;
+        let center = bounds.center();
+        let radius = (0.5 * bounds.extent().length()).max(1e-6);
+        let dist = radius / (0.5 * vfov_deg.to_radians()).sin();
+        let eye = center + Vec3::new(0.15, 0.3, 1.0).normalize() * dist;
+        Self {
+            eye,
+            target: center,
+            up: Vec3::Y,
+            vfov_deg,
+        }
+    }
+
+    /// One ray through the centre of each pixel of a `width × height` image, row by row from the
+    /// top left.
+    pub fn primary_rays(&self, width: u32, height: u32) -> Vec<Ray> {
+        let forward = (self.target - self.eye).normalize();
+        let right = forward.cross(self.up).normalize();
+        let up = right.cross(forward);
+        let tan = (0.5 * self.vfov_deg.to_radians()).tan();
+        let aspect = width as f32 / height.max(1) as f32;
+        let mut rays = Vec::with_capacity(width as usize * height as usize);
+        for y in 0..height {
+            for x in 0..width {
+                let sx = (2.0 * (x as f32 + 0.5) / width as f32 - 1.0) * tan * aspect;
+                let sy = (1.0 - 2.0 * (y as f32 + 0.5) / height as f32) * tan;
+                rays.push(Ray::new(
+                    self.eye,
+                    (forward + sx * right + sy * up).normalize(),
+                ));
+            }
+        }
+        rays
+    }
+}
+
+/// `count` rays with origins uniform in `bounds` and directions uniform on the sphere: the
+/// worst case for coherence, like diffuse bounces.
+pub fn incoherent_rays(bounds: &Aabb, count: usize, seed: u64) -> Vec<Ray> {
+    let mut rng = Rng::new(seed);
+    (0..count)
+        .map(|_| Ray::new(rng.in_box(bounds.min, bounds.max), rng.unit_vector()))
+        .collect()
+}
+
+/// A point light above and to the side of the box, at twice its radius from the centre.
+pub fn default_light(bounds: &Aabb) -> Vec3 {
+    bounds.center() + Vec3::new(0.6, 1.0, 0.4).normalize() * bounds.extent().length()
+}
+
+/// Occlusion rays from each primary hit to `light`: origin at the hit point, direction towards
+/// the light, `t` in `[1e-4, 1 - 1e-4]` of the way there (the margins keep the surface that was
+/// hit and the light itself out of the test).
+pub fn shadow_rays(primary: &[Ray], hits: &[Option<Hit>], light: Vec3) -> Vec<Ray> {
+    primary
+        .iter()
+        .zip(hits)
+        .filter_map(|(r, h)| h.map(|h| r.at(h.t)))
+        .filter(|&p| p != light)
+        .map(|p| Ray::with_interval(p, light - p, 1e-4, 1.0 - 1e-4))
+        .collect()
+}
+
+/// An error reading a rays file.
+#[derive(Clone, Debug, PartialEq)]
+pub struct RaysFileError {
+    /// The file.
+    pub path: std::path::PathBuf,
+    /// The 1-based line, when one is to blame.
+    pub line: Option<usize>,
+    /// What is wrong.
+    pub message: String,
+}
+
+impl fmt::Display for RaysFileError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        write!(f, "{}", self.path.display())?;
+        if let Some(l) = self.line {
+            write!(f, ":{l}")?;
+        }
+        write!(f, ": {}", self.message)
+    }
+}
+
+impl std::error::Error for RaysFileError {}
+
+/// Reads rays, one per line: `ox oy oz dx dy dz [tmin tmax]`; `#` starts a comment; blank lines
+/// are skipped. Without an interval a ray covers `[0, inf]`.
+///
+/// # Errors
+/// A [`RaysFileError`] naming the file and line for an unreadable file, a line with other than 6
+/// or 8 numbers, or a ray that is not [`Ray::is_valid`] (zero or non-finite direction, ...).
+pub fn read_rays_file(path: &Path) -> Result<Vec<Ray>, RaysFileError> {
+    let err = |line, message| RaysFileError {
+        path: path.to_owned(),
+        line,
+        message,
+    };
+    let text =
+        std::fs::read_to_string(path).map_err(|e| err(None, format!("cannot read file: {e}")))?;
+    parse_rays(&text).map_err(|(line, message)| err(Some(line), message))
+}
+
+/// Parses the rays-file format from a string; errors carry the 1-based line.
+///
+/// # Errors
+/// As [`read_rays_file`].
+pub fn parse_rays(text: &str) -> Result<Vec<Ray>, (usize, String)> {
+    let mut rays = Vec::new();
+    for (n, line) in text.lines().enumerate() {
+        let data = line.split('#').next().unwrap_or("");
+        let words: Vec<&str> = data.split_whitespace().collect();
+        if words.is_empty() {
+            continue;
+        }
+        let nums = words
+            .iter()
+            .map(|w| {
+                w.parse::<f32>()
+                    .map_err(|_| (n + 1, format!("`{w}` is not a number")))
+            })
+            .collect::<Result<Vec<f32>, _>>()?;
+        let ray = match nums[..] {
+            [ox, oy, oz, dx, dy, dz] => Ray::new(Vec3::new(ox, oy, oz), Vec3::new(dx, dy, dz)),
+            [ox, oy, oz, dx, dy, dz, t0, t1] => {
+                Ray::with_interval(Vec3::new(ox, oy, oz), Vec3::new(dx, dy, dz), t0, t1)
+            }
+            _ => {
+                return Err((
+                    n + 1,
+                    format!(
+                        "expected 6 or 8 numbers (ox oy oz dx dy dz [tmin tmax]), found {}",
+                        nums.len()
+                    ),
+                ));
+            }
+        };
+        if !ray.is_valid() {
+            return Err((
+                n + 1,
+                "invalid ray: needs finite origin, non-zero finite direction and tmin <= tmax"
+                    .into(),
+            ));
+        }
+        rays.push(ray);
+    }
+    Ok(rays)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rays_file_round_trip() {
+        let r = Ray::with_interval(
+            Vec3::new(0.1, -0.0, 3.0e-7),
+            Vec3::new(1.0 / 3.0, 0.0, -2.0),
+            0.5,
+            f32::INFINITY,
+        );
+        let text = format!("# comment\n\n{}  # trailing\n0 0 0 0 0 1\n", r.to_line());
+        let rays = parse_rays(&text).unwrap();
+        assert_eq!(rays.len(), 2);
+        assert_eq!(
+            rays[0].origin.to_array().map(f32::to_bits),
+            r.origin.to_array().map(f32::to_bits)
+        );
+        assert_eq!(rays[0].dir, r.dir);
+        assert_eq!((rays[0].t_min, rays[0].t_max), (0.5, f32::INFINITY));
+        assert_eq!(rays[1].t_max, f32::INFINITY);
+    }
+
+    #[test]
+    fn rays_file_errors_name_the_line() {
+        assert_eq!(parse_rays("0 0 0 1 0 0\n1 2 3\n").unwrap_err().0, 2);
+        assert_eq!(parse_rays("0 0 0 x 0 0\n").unwrap_err().0, 1);
+        assert_eq!(parse_rays("0 0 0 0 0 0\n").unwrap_err().0, 1);
+        assert_eq!(parse_rays("0 0 nan 1 0 0\n").unwrap_err().0, 1);
+        assert_eq!(parse_rays("0 0 0 1 0 0 2 1\n").unwrap_err().0, 1);
+    }
+
+    #[test]
+    fn primary_rays_cover_the_image() {
+        let b = Aabb::new(Vec3::ZERO, Vec3::ONE);
+        let cam = Camera::framing(&b);
+        let rays = cam.primary_rays(8, 6);
+        assert_eq!(rays.len(), 48);
+        // The centre pixels look at (nearly) the box centre.
+        let to_center = (b.center() - cam.eye).normalize();
+        assert!(rays[3 * 8 + 4].dir.dot(to_center) > 0.99);
+    }
+}

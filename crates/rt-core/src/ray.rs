@@ -59,7 +59,7 @@ impl Ray {
     }
 
     /// Whether origin, direction and interval are usable: all finite except `t_max`, which may be
-    /// `+inf`; a non-zero direction; and `t_min <= t_max`.
+    /// `+inf`; a non-zero direction; and `0 <= t_min <= t_max`.
     ///
     /// Structures do not check this on every ray (it would cost time on the hot path); loaders of
     /// ray files and ray generators do.
@@ -68,6 +68,7 @@ impl Ray {
             && self.dir.is_finite()
             && self.dir != Vec3::ZERO
             && self.t_min.is_finite()
+            && self.t_min >= 0.0
             && !self.t_max.is_nan()
             && self.t_min <= self.t_max
     }

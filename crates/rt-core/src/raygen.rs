@@ -163,7 +163,7 @@ pub fn parse_rays(text: &str) -> Result<Vec<Ray>, (usize, String)> {
         if !ray.is_valid() {
             return Err((
                 n + 1,
-                "invalid ray: needs finite origin, non-zero finite direction and tmin <= tmax"
+                "invalid ray: needs finite origin, non-zero finite direction and 0 <= tmin <= tmax"
                     .into(),
             ));
         }

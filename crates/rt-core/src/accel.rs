@@ -25,6 +25,18 @@ impl Hit {
     pub fn beats(t: f32, prim: u32, best_t: f32, best_prim: u32) -> bool {
         t < best_t || (t == best_t && prim < best_prim)
     }
+
+    /// Whether two closest-hit answers agree: both miss, or both hit the same primitive with `t`
+    /// within a relative `1e-5`. This is the equality the conformance kit and `compare` use.
+    pub fn agree(a: Option<Hit>, b: Option<Hit>) -> bool {
+        match (a, b) {
+            (None, None) => true,
+            (Some(a), Some(b)) => {
+                a.prim == b.prim && (a.t - b.t).abs() <= 1e-5 * a.t.abs().max(1.0)
+            }
+            _ => false,
+        }
+    }
 }
 
 /// Shape of a built structure, reported by [`Accel::build_stats`].

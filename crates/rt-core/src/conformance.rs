@@ -52,15 +52,6 @@ impl fmt::Display for Mismatch {
     }
 }
 
-/// Whether two closest-hit answers agree: same primitive and `t` within a relative `1e-5`.
-pub fn same_hit(a: Option<Hit>, b: Option<Hit>) -> bool {
-    match (a, b) {
-        (None, None) => true,
-        (Some(a), Some(b)) => a.prim == b.prim && (a.t - b.t).abs() <= 1e-5 * a.t.abs().max(1.0),
-        _ => false,
-    }
-}
-
 /// Compares `accel` with `reference` on every ray, returning the first disagreement.
 ///
 /// # Errors
@@ -73,7 +64,7 @@ pub fn compare_rays<A: Accel>(
     for ray in rays {
         let expected = reference.intersect(ray);
         let got = accel.intersect(ray);
-        if !same_hit(expected, got) {
+        if !Hit::agree(expected, got) {
             return Err(Mismatch {
                 query: "intersect",
                 ray: *ray,
@@ -82,7 +73,7 @@ pub fn compare_rays<A: Accel>(
             });
         }
         let counted = accel.intersect_with(ray, &mut Counters::default());
-        if !same_hit(got, counted) {
+        if !Hit::agree(got, counted) {
             return Err(Mismatch {
                 query: "intersect_with(Counters)",
                 ray: *ray,
@@ -728,4 +719,34 @@ fn exponential_chain() -> Scene {
     let hi = Vec3::new(1.5f32.powi(120), 2.0, 2.0);
     rays.extend(aimed_rays(&mut rng, &triangles, Vec3::splat(-2.0), hi, 200));
     Scene { triangles, rays }
+}
+
+/// The directory of real meshes beside the repository (`../shared/meshes`), or the one named by
+/// the `RT_SHARED_MESHES` environment variable.
+///
+/// Returns `None`, after printing why on stderr, when the directory is missing, so a local run
+/// can go on without it.
+///
+/// # Panics
+/// When the directory is missing and `CI=true`: in CI a test that needs the meshes must fail,
+/// never skip.
+pub fn shared_meshes_dir() -> Option<std::path::PathBuf> {
+    let dir = match std::env::var_os("RT_SHARED_MESHES") {
+        Some(d) => std::path::PathBuf::from(d),
+        None => std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/meshes"),
+    };
+    if dir.join("stanford-bunny.obj").is_file() {
+        return Some(dir);
+    }
+    let ci = std::env::var("CI").is_ok_and(|v| v == "true");
+    assert!(
+        !ci,
+        "shared meshes not found at {} (CI=true, so this fails instead of skipping)",
+        dir.display()
+    );
+    eprintln!(
+        "note: shared meshes not found at {}; skipping what needs them (set RT_SHARED_MESHES)",
+        dir.display()
+    );
+    None
 }

@@ -20,14 +20,46 @@ pub struct Camera {
 }
 
 impl Camera {
-    /// A camera that sees the whole box from the front (+z), slightly from above, with a 40°
-    /// vertical field of view.
-    pub fn framing(bounds: &Aabb) -> Self {
+    /// A camera that looks at the box from the front (+z), slightly from above, with a 40°
+    /// vertical field of view, as close as it can while every corner of the box stays in a
+    /// `width × height` image.
+    pub fn framing(bounds: &Aabb, width: u32, height: u32) -> Self {
         let vfov_deg = 40.0f32;
         let center = bounds.center();
-        let radius = (0.5 * bounds.extent().length()).max(1e-6);
-        let dist = radius / (0.5 * vfov_deg.to_radians()).sin();
-        let eye = center + Vec3::new(0.15, 0.3, 1.0).normalize() * dist;
+        let back = Vec3::new(0.15, 0.3, 1.0).normalize();
+        let forward = -back;
+        let right = forward.cross(Vec3::Y).normalize();
+        let up = right.cross(forward);
+        let tan_v = (0.5 * vfov_deg.to_radians()).tan();
+        let tan_h = tan_v * width as f32 / height.max(1) as f32;
+        // A corner at offset c from the centre is at depth d + c·forward; it is in view when its
+        // sideways offsets are within depth · tan of the half angles.
+        let mut dist = 1e-6f32;
+        for i in 0..8 {
+            let corner = Vec3::new(
+                if i & 1 == 0 {
+                    bounds.min.x
+                } else {
+                    bounds.max.x
+                },
+                if i & 2 == 0 {
+                    bounds.min.y
+                } else {
+                    bounds.max.y
+                },
+                if i & 4 == 0 {
+                    bounds.min.z
+                } else {
+                    bounds.max.z
+                },
+            ) - center;
+            let depth = corner.dot(forward);
+            dist = dist
+                .max(corner.dot(up).abs() / tan_v - depth)
+                .max(corner.dot(right).abs() / tan_h - depth);
+        }
+        // A small margin so the silhouette does not touch the image border.
+        let eye = center + back * dist * 1.05;
         Self {
             eye,
             target: center,
@@ -208,7 +240,7 @@ mod tests {
     #[test]
     fn primary_rays_cover_the_image() {
         let b = Aabb::new(Vec3::ZERO, Vec3::ONE);
-        let cam = Camera::framing(&b);
+        let cam = Camera::framing(&b, 8, 6);
         let rays = cam.primary_rays(8, 6);
         assert_eq!(rays.len(), 48);
         // The centre pixels look at (nearly) the box centre.

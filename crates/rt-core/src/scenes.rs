@@ -104,7 +104,7 @@ pub fn sphereflake(levels: u32, stacks: u32, slices: u32) -> Mesh {
     }
     let mut mesh = Mesh::default();
     recurse(&mut mesh, Vec3::ZERO, 1.0, Vec3::Y, levels, stacks, slices);
-    let g = 6.0;
+    let g = 2.5;
     let y = -1.0;
     let ground = Mesh::new(
         vec![

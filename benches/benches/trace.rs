@@ -1,0 +1,185 @@
+//! Build and primary-ray trace times of rt-bvh against the `obvhs` and `bvh` crates, on the same
+//! triangles and the same rays, single-threaded. Run with `cargo bench -p rt-benches --bench trace`.
+
+use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
+use rt_benches::{BenchScene, scenes};
+use rt_bvh::{Bvh, BvhParams};
+use rt_core::glam::Vec3A;
+use rt_core::{Accel, MtTriangle, Ray, Triangle};
+use std::hint::black_box;
+use std::time::Duration;
+
+const WIDTH: u32 = 512;
+const HEIGHT: u32 = 384;
+
+fn to_obvhs(tris: &[Triangle]) -> Vec<obvhs::triangle::Triangle> {
+    tris.iter()
+        .map(|t| obvhs::triangle::Triangle {
+            v0: Vec3A::from(t.v0),
+            v1: Vec3A::from(t.v1),
+            v2: Vec3A::from(t.v2),
+        })
+        .collect()
+}
+
+fn obvhs_build(
+    tris: &[obvhs::triangle::Triangle],
+    params: obvhs::BvhBuildParams,
+) -> obvhs::bvh2::Bvh2 {
+    obvhs::bvh2::builder::build_bvh2_from_tris(tris, params, &mut Duration::default())
+}
+
+/// A triangle for the `bvh` crate, which needs its shapes to remember their node.
+struct PeerTri {
+    a: nalgebra::Point3<f32>,
+    b: nalgebra::Point3<f32>,
+    c: nalgebra::Point3<f32>,
+    node: usize,
+}
+
+impl bvh::aabb::Bounded<f32, 3> for PeerTri {
+    fn aabb(&self) -> bvh::aabb::Aabb<f32, 3> {
+        bvh::aabb::Aabb::empty()
+            .grow(&self.a)
+            .grow(&self.b)
+            .grow(&self.c)
+    }
+}
+
+impl bvh::bounding_hierarchy::BHShape<f32, 3> for PeerTri {
+    fn set_bh_node_index(&mut self, i: usize) {
+        self.node = i;
+    }
+    fn bh_node_index(&self) -> usize {
+        self.node
+    }
+}
+
+fn to_peer(tris: &[Triangle]) -> Vec<PeerTri> {
+    let p = |v: rt_core::glam::Vec3| nalgebra::Point3::new(v.x, v.y, v.z);
+    tris.iter()
+        .map(|t| PeerTri {
+            a: p(t.v0),
+            b: p(t.v1),
+            c: p(t.v2),
+            node: 0,
+        })
+        .collect()
+}
+
+fn bench_build(c: &mut Criterion, scene: &BenchScene) {
+    let mut g = c.benchmark_group(format!("build/{}", scene.name));
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(scene.triangles.len() as u64));
+    for (preset, params) in Bvh::<Triangle>::presets() {
+        g.bench_function(BenchmarkId::new("rt-bvh", preset), |b| {
+            b.iter(|| Bvh::build(black_box(&scene.triangles), &params));
+        });
+    }
+    let otris = to_obvhs(&scene.triangles);
+    g.bench_function(BenchmarkId::new("obvhs", "medium"), |b| {
+        b.iter(|| obvhs_build(black_box(&otris), obvhs::BvhBuildParams::medium_build()));
+    });
+    g.bench_function(BenchmarkId::new("bvh-crate", "sah"), |b| {
+        b.iter_batched(
+            || to_peer(&scene.triangles),
+            |mut shapes| bvh::bvh::Bvh::build(&mut shapes),
+            criterion::BatchSize::LargeInput,
+        );
+    });
+    g.finish();
+}
+
+fn count_hits<A: Accel>(accel: &A, rays: &[Ray]) -> usize {
+    rays.iter().filter(|r| accel.intersect(r).is_some()).count()
+}
+
+fn bench_trace(c: &mut Criterion, scene: &BenchScene) {
+    let rays = scene.primary_rays(WIDTH, HEIGHT);
+    let mut g = c.benchmark_group(format!("trace-primary/{}", scene.name));
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(rays.len() as u64));
+
+    let bvh = Bvh::build(&scene.triangles, &BvhParams::sah());
+    let expected = count_hits(&bvh, &rays);
+    g.bench_function("rt-bvh/watertight", |b| {
+        b.iter(|| count_hits(black_box(&bvh), &rays))
+    });
+    let mt: Vec<MtTriangle> = scene.triangles.iter().copied().map(MtTriangle).collect();
+    let bvh_mt = Bvh::build(&mt, &BvhParams::sah());
+    g.bench_function("rt-bvh/moller-trumbore", |b| {
+        b.iter(|| count_hits(black_box(&bvh_mt), &rays))
+    });
+
+    // obvhs: its own Möller–Trumbore test, triangles reordered to leaf order as its examples
+    // recommend (no index indirection in the hot loop).
+    let otris = to_obvhs(&scene.triangles);
+    let orays: Vec<obvhs::ray::Ray> = rays
+        .iter()
+        .map(|r| obvhs::ray::Ray::new_inf(Vec3A::from(r.origin), Vec3A::from(r.dir)))
+        .collect();
+    for (label, params) in [
+        ("medium", obvhs::BvhBuildParams::medium_build()),
+        ("slow", obvhs::BvhBuildParams::slow_build()),
+    ] {
+        let obvh = obvhs_build(&otris, params);
+        let ordered: Vec<obvhs::triangle::Triangle> = obvh
+            .primitive_indices
+            .iter()
+            .map(|&i| otris[i as usize])
+            .collect();
+        let trace = |rays: &[obvhs::ray::Ray]| {
+            rays.iter()
+                .filter(|r| {
+                    let mut hit = obvhs::ray::RayHit::none();
+                    obvh.ray_traverse(**r, &mut hit, |ray, id| ordered[id].intersect(ray))
+                })
+                .count()
+        };
+        let got = trace(&orays);
+        // Different triangle tests may disagree on a handful of edge rays, never on more.
+        assert!(
+            got.abs_diff(expected) <= rays.len() / 1000,
+            "obvhs hits {got}, rt-bvh {expected}"
+        );
+        g.bench_function(format!("obvhs/{label}"), |b| {
+            b.iter(|| trace(black_box(&orays)))
+        });
+    }
+
+    // The `bvh` crate: its iterator yields every leaf shape whose box the ray enters (no
+    // front-to-back pruning), tested with its Möller–Trumbore.
+    let mut shapes = to_peer(&scene.triangles);
+    let peer = bvh::bvh::Bvh::build(&mut shapes);
+    let prays: Vec<bvh::ray::Ray<f32, 3>> = rays
+        .iter()
+        .map(|r| {
+            bvh::ray::Ray::new(
+                nalgebra::Point3::new(r.origin.x, r.origin.y, r.origin.z),
+                nalgebra::Vector3::new(r.dir.x, r.dir.y, r.dir.z),
+            )
+        })
+        .collect();
+    let peer_trace = |rays: &[bvh::ray::Ray<f32, 3>]| {
+        rays.iter()
+            .filter(|r| {
+                peer.traverse_iterator(*r, &shapes)
+                    .map(|s| r.intersects_triangle(&s.a, &s.b, &s.c).distance)
+                    .fold(f32::INFINITY, f32::min)
+                    .is_finite()
+            })
+            .count()
+    };
+    g.bench_function("bvh-crate", |b| b.iter(|| peer_trace(black_box(&prays))));
+    g.finish();
+}
+
+fn benches(c: &mut Criterion) {
+    for scene in scenes() {
+        bench_build(c, &scene);
+        bench_trace(c, &scene);
+    }
+}
+
+criterion_group!(trace, benches);
+criterion_main!(trace);

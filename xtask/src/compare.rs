@@ -1,0 +1,581 @@
+//! `cargo xtask compare`: the structure shootout.
+//!
+//! Builds every selected structure on one scene, traces the same rays through each, and checks
+//! every answer: against brute force on a random subset of the rays (all of them when there are
+//! few), and against each other on all rays, with brute force settling every ray on which the
+//! structures disagree. Reports build time, memory, tree shape, traversal cost per ray and
+//! speed, with brute force as the baseline row.
+
+use crate::structures::{self, Query, Traceable};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rt_bvh::{Bvh, BvhParams};
+use rt_core::raygen::{self, Camera};
+use rt_core::scenes::{self, BUILTIN_SCENES};
+use rt_core::{Aabb, Accel, Hit, Primitive, Ray, Rng, Triangle};
+use std::fmt::Write as _;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+/// Which rays to trace.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayKind {
+    /// One ray per pixel from a pinhole camera framing the scene.
+    Primary,
+    /// Random origins inside the scene box, random directions.
+    Incoherent,
+    /// Occlusion rays from the primary hits to a point light (any-hit queries).
+    Shadow,
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// A built-in scene name (listed below) or the path of an .obj file.
+    #[arg(long, default_value = "sphereflake")]
+    pub scene: String,
+    /// Which rays to trace [default: primary].
+    #[arg(long, value_enum)]
+    pub rays: Option<RayKind>,
+    /// Image width for primary and shadow rays (incoherent: width × height rays).
+    #[arg(long, default_value_t = 1024)]
+    pub width: u32,
+    /// Image height for primary and shadow rays.
+    #[arg(long, default_value_t = 768)]
+    pub height: u32,
+    /// Comma-separated rows to run (listed below); brute force is always the baseline.
+    /// [default: all]
+    #[arg(long, value_delimiter = ',')]
+    pub structures: Vec<String>,
+    /// Threads for tracing [default: all cores]. Builds are single-threaded.
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Replay rays from a file, one per line: `ox oy oz dx dy dz [tmin tmax]` (`#` comments).
+    /// Closest-hit queries, or any-hit with `--rays shadow`. The JSON then carries every answer.
+    #[arg(long)]
+    pub rays_file: Option<PathBuf>,
+    /// How many rays brute force checks (a random subset; all rays if there are fewer).
+    #[arg(long, default_value_t = 20_000)]
+    pub check_rays: usize,
+    /// Seed for incoherent rays and for the checked subset.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Timed passes per structure, the fastest reported (brute force: its one counted pass).
+    #[arg(long, default_value_t = 3)]
+    pub repeats: u32,
+}
+
+/// The text after `--help`: built-in scenes and structure rows.
+pub fn after_help() -> String {
+    let mut s = String::from("Built-in scenes:\n");
+    for b in BUILTIN_SCENES {
+        let _ = writeln!(s, "  {:<14} {}", b.name, b.description);
+    }
+    s.push_str("\nStructure rows:\n");
+    for e in structures::all() {
+        let _ = writeln!(s, "  {}", e.name);
+    }
+    s.push_str("\nExit status: 0 when every answer agrees, 1 on any mismatch, 2 on bad input.");
+    s
+}
+
+/// One row of the report.
+#[derive(Debug)]
+pub struct Row {
+    pub name: String,
+    pub build_ms: f64,
+    pub memory_bytes: usize,
+    pub nodes: usize,
+    pub leaves: usize,
+    pub max_depth: usize,
+    pub avg_leaf_prims: f64,
+    pub rays_traced: usize,
+    pub hits: usize,
+    pub mismatches: usize,
+    pub avg_visits: f64,
+    pub avg_prim_tests: f64,
+    pub mrays_per_s: f64,
+    pub speedup: f64,
+    answers: Vec<Option<Hit>>,
+}
+
+/// A ray on which a structure disagreed with brute force.
+#[derive(Debug)]
+pub struct Disagreement {
+    pub structure: String,
+    pub ray_index: usize,
+    pub ray: Ray,
+    pub expected: Option<Hit>,
+    pub got: Option<Hit>,
+}
+
+/// Everything `compare` measured.
+#[derive(Debug)]
+pub struct Report {
+    pub scene: String,
+    pub triangles: usize,
+    pub valid_triangles: usize,
+    pub ray_kind: &'static str,
+    pub rays: usize,
+    pub threads: usize,
+    pub checked_rays: usize,
+    pub rows: Vec<Row>,
+    pub disagreements: Vec<Disagreement>,
+    pub per_ray_answers: bool,
+}
+
+impl Report {
+    pub fn total_mismatches(&self) -> usize {
+        self.rows.iter().map(|r| r.mismatches).sum()
+    }
+}
+
+/// Runs the comparison and prints the report (table or JSON) to stdout; disagreements go to
+/// stderr.
+///
+/// # Errors
+/// One line describing bad input: unknown scene or structure, unreadable or malformed file,
+/// a scene without valid triangles.
+pub fn run(args: &Args) -> Result<Report, String> {
+    let threads = args
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    if threads == 0 {
+        return Err("--threads must be at least 1".into());
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| format!("cannot start {threads} threads: {e}"))?;
+    let report = pool.install(|| measure(args, threads))?;
+    if args.json {
+        println!("{}", to_json(&report));
+    } else {
+        print!("{}", to_table(&report));
+    }
+    if !report.disagreements.is_empty() {
+        eprint!("{}", describe_disagreements(&report, args));
+    }
+    Ok(report)
+}
+
+fn select_entries(names: &[String]) -> Result<Vec<structures::Entry>, String> {
+    let all = structures::all();
+    if names.is_empty() || names.iter().any(|n| n == "all") {
+        return Ok(all);
+    }
+    let known: Vec<String> = all.iter().map(|e| e.name.clone()).collect();
+    let mut all: Vec<Option<structures::Entry>> = all.into_iter().map(Some).collect();
+    let mut out = Vec::new();
+    for name in names {
+        if name == "brute-force" {
+            continue;
+        }
+        let Some(i) = known.iter().position(|k| k == name) else {
+            return Err(format!(
+                "unknown structure `{name}` (known: {}, all)",
+                known.join(", ")
+            ));
+        };
+        if let Some(e) = all[i].take() {
+            out.push(e);
+        }
+    }
+    Ok(out)
+}
+
+fn load_scene(spec: &str) -> Result<(String, Vec<Triangle>), String> {
+    if let Some(mesh) = scenes::builtin(spec) {
+        return Ok((spec.to_string(), mesh.triangles()));
+    }
+    let path = Path::new(spec);
+    if !path.exists() && !spec.contains(['/', '\\', '.']) {
+        let names: Vec<&str> = BUILTIN_SCENES.iter().map(|s| s.name).collect();
+        return Err(format!(
+            "no built-in scene or file named `{spec}` (built-in scenes: {})",
+            names.join(", ")
+        ));
+    }
+    let mesh = rt_core::load_obj(path).map_err(|e| e.to_string())?;
+    Ok((spec.to_string(), mesh.triangles()))
+}
+
+struct Progress(ProgressBar);
+
+impl Progress {
+    fn new(steps: u64, visible: bool) -> Self {
+        let bar = ProgressBar::with_draw_target(
+            Some(steps),
+            if visible {
+                ProgressDrawTarget::stderr()
+            } else {
+                ProgressDrawTarget::hidden()
+            },
+        );
+        if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} {msg} ({elapsed})") {
+            bar.set_style(style);
+        }
+        Self(bar)
+    }
+    fn step(&self, msg: String) {
+        self.0.set_message(msg);
+        self.0.tick();
+    }
+    fn done(&self) {
+        self.0.inc(1);
+    }
+}
+
+fn measure(args: &Args, threads: usize) -> Result<Report, String> {
+    let entries = select_entries(&args.structures)?;
+    let (scene, tris) = load_scene(&args.scene)?;
+    let valid: Vec<&Triangle> = tris.iter().filter(|t| t.is_valid()).collect();
+    if valid.is_empty() {
+        return Err(format!(
+            "{scene}: no valid triangles (all {} are degenerate or non-finite)",
+            tris.len()
+        ));
+    }
+    let bounds = valid.iter().fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+    if args.width == 0 || args.height == 0 {
+        return Err("--width and --height must be at least 1".into());
+    }
+
+    let (rays, ray_kind, query) = make_rays(args, &tris, &bounds)?;
+    if rays.is_empty() {
+        return Err(format!("no rays to trace ({ray_kind} rays on {scene})"));
+    }
+    let progress = Progress::new(
+        2 * entries.len() as u64 + 3,
+        std::io::stdout().is_terminal() && !args.json,
+    );
+
+    // The checked subset: every ray when there are few, else a reproducible random sample.
+    let subset: Vec<usize> = if rays.len() <= args.check_rays {
+        (0..rays.len()).collect()
+    } else {
+        let mut idx: Vec<usize> = (0..rays.len()).collect();
+        let mut rng = Rng::new(args.seed ^ 0x5eed_c4ec);
+        for i in 0..args.check_rays {
+            let j = i + rng.below((rays.len() - i) as u32) as usize;
+            idx.swap(i, j);
+        }
+        idx.truncate(args.check_rays);
+        idx.sort_unstable();
+        idx
+    };
+    let subset_rays: Vec<Ray> = subset.iter().map(|&i| rays[i]).collect();
+
+    let mut rows = Vec::new();
+    let mut built: Vec<Box<dyn Traceable>> = Vec::new();
+    for entry in &entries {
+        progress.step(format!("building {}", entry.name));
+        let t = Instant::now();
+        let s = (entry.build)(&tris);
+        let build_ms = t.elapsed().as_secs_f64() * 1e3;
+        progress.done();
+        progress.step(format!("tracing {}", entry.name));
+        rows.push(trace_row(
+            &entry.name,
+            s.as_ref(),
+            build_ms,
+            &rays,
+            query,
+            args.repeats,
+        ));
+        built.push(s);
+        progress.done();
+    }
+
+    progress.step(format!("brute force on {} rays", subset_rays.len()));
+    let brute_entry = structures::brute_force();
+    let t = Instant::now();
+    let brute = (brute_entry.build)(&tris);
+    let build_ms = t.elapsed().as_secs_f64() * 1e3;
+    // One pass for brute force: its counters cost nothing next to N primitive tests per ray, so
+    // the counted pass is also the timed one.
+    let mut brute_row = trace_row(
+        &brute_entry.name,
+        brute.as_ref(),
+        build_ms,
+        &subset_rays,
+        query,
+        0,
+    );
+    progress.done();
+
+    progress.step("cross-checking".into());
+    let agree = |a: Option<Hit>, b: Option<Hit>| match query {
+        Query::Closest => Hit::agree(a, b),
+        Query::Any => a.is_some() == b.is_some(),
+    };
+    let mut disagreements = Vec::new();
+    let mut record = |rows: &mut [Row], ray_index: usize, expected: Option<Hit>| {
+        for row in rows.iter_mut() {
+            let got = row.answers[ray_index];
+            if !agree(expected, got) {
+                row.mismatches += 1;
+                if disagreements.len() < 8 {
+                    disagreements.push(Disagreement {
+                        structure: row.name.clone(),
+                        ray_index,
+                        ray: rays[ray_index],
+                        expected,
+                        got,
+                    });
+                }
+            }
+        }
+    };
+    let mut in_subset = vec![false; rays.len()];
+    for (k, &i) in subset.iter().enumerate() {
+        in_subset[i] = true;
+        record(&mut rows, i, brute_row.answers[k]);
+    }
+    // Outside the subset, brute force settles every ray on which the structures disagree.
+    let mut settled = 0;
+    for i in (0..rays.len()).filter(|&i| !in_subset[i]) {
+        let first = rows.first().map(|r| r.answers[i]);
+        if rows
+            .iter()
+            .any(|r| first.is_some_and(|f| !agree(f, r.answers[i])))
+        {
+            settled += 1;
+            record(&mut rows, i, brute.answer(&rays[i], query));
+        }
+    }
+    progress.done();
+    progress.0.finish_and_clear();
+
+    let base = brute_row.mrays_per_s;
+    brute_row.speedup = 1.0;
+    for r in &mut rows {
+        r.speedup = r.mrays_per_s / base;
+    }
+    let mut all_rows = vec![brute_row];
+    all_rows.extend(rows);
+    Ok(Report {
+        scene,
+        triangles: tris.len(),
+        valid_triangles: valid.len(),
+        ray_kind,
+        rays: rays.len(),
+        threads,
+        checked_rays: subset.len() + settled,
+        rows: all_rows,
+        disagreements,
+        per_ray_answers: args.rays_file.is_some(),
+    })
+}
+
+fn make_rays(
+    args: &Args,
+    tris: &[Triangle],
+    bounds: &Aabb,
+) -> Result<(Vec<Ray>, &'static str, Query), String> {
+    let kind = args.rays.unwrap_or(RayKind::Primary);
+    let query = if kind == RayKind::Shadow {
+        Query::Any
+    } else {
+        Query::Closest
+    };
+    if let Some(path) = &args.rays_file {
+        let rays = raygen::read_rays_file(path).map_err(|e| e.to_string())?;
+        return Ok((rays, "file", query));
+    }
+    let camera = Camera::framing(bounds, args.width, args.height);
+    Ok(match kind {
+        RayKind::Primary => (
+            camera.primary_rays(args.width, args.height),
+            "primary",
+            query,
+        ),
+        RayKind::Incoherent => {
+            let n = args.width as usize * args.height as usize;
+            (
+                raygen::incoherent_rays(bounds, n, args.seed),
+                "incoherent",
+                query,
+            )
+        }
+        RayKind::Shadow => {
+            // The primary hits come from a SAH BVH; any correct structure gives the same ones.
+            let primary = camera.primary_rays(args.width, args.height);
+            let bvh = Bvh::build(tris, &BvhParams::sah());
+            let hits: Vec<Option<Hit>> = primary.iter().map(|r| bvh.intersect(r)).collect();
+            (
+                raygen::shadow_rays(&primary, &hits, raygen::default_light(bounds)),
+                "shadow",
+                query,
+            )
+        }
+    })
+}
+
+fn trace_row(
+    name: &str,
+    s: &dyn Traceable,
+    build_ms: f64,
+    rays: &[Ray],
+    query: Query,
+    repeats: u32,
+) -> Row {
+    let stats = s.build_stats();
+    let t = Instant::now();
+    let (answers, counters) = s.trace_counted(rays, query);
+    let mut best = t.elapsed();
+    let mut hits = answers.iter().filter(|a| a.is_some()).count();
+    if repeats > 0 {
+        best = Duration::MAX;
+    }
+    for _ in 0..repeats {
+        let t = Instant::now();
+        hits = s.trace_timed(rays, query);
+        best = best.min(t.elapsed());
+    }
+    let n = rays.len().max(1) as f64;
+    Row {
+        name: name.to_string(),
+        build_ms,
+        memory_bytes: s.memory_bytes(),
+        nodes: stats.nodes,
+        leaves: stats.leaves,
+        max_depth: stats.max_depth,
+        avg_leaf_prims: stats.avg_prims_per_leaf(),
+        rays_traced: rays.len(),
+        hits,
+        mismatches: 0,
+        avg_visits: counters.node_visits as f64 / n,
+        avg_prim_tests: counters.prim_tests as f64 / n,
+        mrays_per_s: rays.len() as f64 / best.as_secs_f64().max(1e-9) / 1e6,
+        speedup: 0.0,
+        answers,
+    }
+}
+
+fn to_table(r: &Report) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "scene {} ({} triangles, {} valid), {} {} rays, {} threads; {} rays checked against brute force",
+        r.scene, r.triangles, r.valid_triangles, r.rays, r.ray_kind, r.threads, r.checked_rays
+    );
+    let _ = writeln!(
+        s,
+        "{:<14} {:>9} {:>11} {:>8} {:>5} {:>10} {:>10} {:>9} {:>9} {:>10}",
+        "structure",
+        "build ms",
+        "memory MiB",
+        "nodes",
+        "depth",
+        "visits/ray",
+        "tests/ray",
+        "Mrays/s",
+        "speedup",
+        "mismatches"
+    );
+    for row in &r.rows {
+        let _ = writeln!(
+            s,
+            "{:<14} {:>9.1} {:>11.2} {:>8} {:>5} {:>10.1} {:>10.1} {:>9} {:>8.0}x {:>10}",
+            row.name,
+            row.build_ms,
+            row.memory_bytes as f64 / (1024.0 * 1024.0),
+            row.nodes,
+            row.max_depth,
+            row.avg_visits,
+            row.avg_prim_tests,
+            three_digits(row.mrays_per_s),
+            row.speedup,
+            row.mismatches
+        );
+    }
+    if r.rows.len() > 1 && r.total_mismatches() == 0 {
+        let _ = writeln!(s, "all answers agree");
+    }
+    s
+}
+
+/// Three significant digits, so that brute force's 0.000823 and a BVH's 25.5 both read well.
+fn three_digits(x: f64) -> String {
+    if x >= 100.0 || x == 0.0 {
+        format!("{x:.0}")
+    } else {
+        let decimals = (2 - x.log10().floor() as i32).clamp(0, 8) as usize;
+        format!("{x:.decimals$}")
+    }
+}
+
+fn hit_json(h: Option<Hit>, query_any: bool) -> serde_json::Value {
+    match h {
+        None if query_any => serde_json::Value::Bool(false),
+        Some(_) if query_any => serde_json::Value::Bool(true),
+        None => serde_json::Value::Null,
+        Some(h) => serde_json::json!({ "prim": h.prim, "t": h.t, "u": h.u, "v": h.v }),
+    }
+}
+
+fn to_json(r: &Report) -> String {
+    let any = r
+        .rows
+        .iter()
+        .flat_map(|row| row.answers.iter())
+        .flatten()
+        .any(|h| h.prim == u32::MAX);
+    let results: Vec<serde_json::Value> = r
+        .rows
+        .iter()
+        .map(|row| {
+            let mut v = serde_json::json!({
+                "structure": row.name,
+                "build_ms": row.build_ms,
+                "memory_bytes": row.memory_bytes,
+                "nodes": row.nodes,
+                "max_depth": row.max_depth,
+                "hits": row.hits,
+                "mismatches": row.mismatches,
+                "avg_visits": row.avg_visits,
+                "avg_prim_tests": row.avg_prim_tests,
+                "mrays_per_s": row.mrays_per_s,
+                "speedup": row.speedup,
+                "leaves": row.leaves,
+                "avg_leaf_prims": row.avg_leaf_prims,
+                "rays_traced": row.rays_traced,
+            });
+            if r.per_ray_answers {
+                v["ray_hits"] = row.answers.iter().map(|&h| hit_json(h, any)).collect();
+            }
+            v
+        })
+        .collect();
+    serde_json::json!({
+        "scene": r.scene,
+        "triangles": r.triangles,
+        "valid_triangles": r.valid_triangles,
+        "ray_kind": r.ray_kind,
+        "rays": r.rays,
+        "threads": r.threads,
+        "checked_rays": r.checked_rays,
+        "results": results,
+    })
+    .to_string()
+}
+
+fn describe_disagreements(r: &Report, args: &Args) -> String {
+    let mut s = format!(
+        "error: {} mismatches. First disagreeing rays (save the rays-file lines to a file and replay with \
+         `cargo xtask compare --scene {} --rays-file FILE`, or paste the Rust into a test):\n",
+        r.total_mismatches(),
+        args.scene
+    );
+    for d in &r.disagreements {
+        let _ = writeln!(s, "  {} on ray {}:", d.structure, d.ray_index);
+        let _ = writeln!(s, "    rays-file: {}", d.ray.to_line());
+        let _ = writeln!(s, "    rust:      {}", d.ray.to_rust());
+        let _ = writeln!(s, "    brute-force: {:?}", d.expected);
+        let _ = writeln!(s, "    {}: {:?}", d.structure, d.got);
+    }
+    s
+}

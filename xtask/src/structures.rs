@@ -1,0 +1,123 @@
+//! The structures `compare` knows, behind one object-safe interface.
+//!
+//! [`rt_core::Accel`] is generic (and so not object-safe); `compare` needs a list. Each entry
+//! wraps one structure type and preset. Dispatch is dynamic only per batch of rays: the batch
+//! loop itself is monomorphized, so timings measure the structure, not the wrapper.
+
+use rayon::prelude::*;
+use rt_bvh::Bvh;
+use rt_core::{Accel, BruteForce, BuildStats, Counters, Hit, Ray, Triangle};
+
+/// Which query a run makes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Query {
+    /// Closest hit.
+    Closest,
+    /// Any hit (occlusion); answers are `Some` with `prim == u32::MAX` when occluded.
+    Any,
+}
+
+/// A built structure, ready to trace.
+pub trait Traceable: Send + Sync {
+    fn memory_bytes(&self) -> usize;
+    fn build_stats(&self) -> BuildStats;
+    /// Answers for every ray, with counters, in parallel over the current rayon pool.
+    fn trace_counted(&self, rays: &[Ray], query: Query) -> (Vec<Option<Hit>>, Counters);
+    /// Traces every ray without counters and returns the number of hits (so the work cannot be
+    /// optimized away). This is the timed path.
+    fn trace_timed(&self, rays: &[Ray], query: Query) -> usize;
+    /// One ray, for re-checking a disagreement.
+    fn answer(&self, ray: &Ray, query: Query) -> Option<Hit>;
+}
+
+struct Built<A>(A);
+
+const CHUNK: usize = 256;
+const OCCLUDED: Hit = Hit {
+    prim: u32::MAX,
+    t: f32::NAN,
+    u: 0.0,
+    v: 0.0,
+};
+
+impl<A: Accel<Prim = Triangle>> Traceable for Built<A> {
+    fn memory_bytes(&self) -> usize {
+        self.0.memory_bytes()
+    }
+
+    fn build_stats(&self) -> BuildStats {
+        self.0.build_stats()
+    }
+
+    fn trace_counted(&self, rays: &[Ray], query: Query) -> (Vec<Option<Hit>>, Counters) {
+        let mut answers = vec![None; rays.len()];
+        let counters = answers
+            .par_chunks_mut(CHUNK)
+            .zip(rays.par_chunks(CHUNK))
+            .map(|(out, rays)| {
+                let mut c = Counters::default();
+                for (o, r) in out.iter_mut().zip(rays) {
+                    *o = match query {
+                        Query::Closest => self.0.intersect_with(r, &mut c),
+                        Query::Any => self.0.occluded_with(r, &mut c).then_some(OCCLUDED),
+                    };
+                }
+                c
+            })
+            .reduce(Counters::default, Counters::merged);
+        (answers, counters)
+    }
+
+    fn trace_timed(&self, rays: &[Ray], query: Query) -> usize {
+        rays.par_chunks(CHUNK)
+            .map(|rays| match query {
+                Query::Closest => rays
+                    .iter()
+                    .filter(|r| self.0.intersect(r).is_some())
+                    .count(),
+                Query::Any => rays.iter().filter(|r| self.0.occluded(r)).count(),
+            })
+            .sum()
+    }
+
+    fn answer(&self, ray: &Ray, query: Query) -> Option<Hit> {
+        match query {
+            Query::Closest => self.0.intersect(ray),
+            Query::Any => self.0.occluded(ray).then_some(OCCLUDED),
+        }
+    }
+}
+
+/// One row `compare` can run: a structure type with one preset.
+pub struct Entry {
+    /// Row name: the crate name without `rt-` for the default preset, `name-preset` otherwise.
+    pub name: String,
+    pub build: Box<dyn Fn(&[Triangle]) -> Box<dyn Traceable> + Send + Sync>,
+}
+
+fn entries_of<A: Accel<Prim = Triangle> + 'static>() -> Vec<Entry> {
+    A::presets()
+        .into_iter()
+        .enumerate()
+        .map(|(i, (preset, params))| Entry {
+            name: if i == 0 {
+                A::NAME.to_string()
+            } else {
+                format!("{}-{preset}", A::NAME)
+            },
+            build: Box::new(move |tris: &[Triangle]| {
+                Box::new(Built(A::build(tris, &params))) as Box<dyn Traceable>
+            }),
+        })
+        .collect()
+}
+
+/// Every structure and preset, in report order.
+pub fn all() -> Vec<Entry> {
+    entries_of::<Bvh<Triangle>>()
+}
+
+/// The brute-force reference.
+pub fn brute_force() -> Entry {
+    entries_of::<BruteForce<Triangle>>().remove(0)
+}

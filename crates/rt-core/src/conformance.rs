@@ -4,8 +4,10 @@
 //! A structure crate (or a student's) enables the `conformance` feature of `rt-core` in its
 //! dev-dependencies and writes one line per preset in a test file:
 //!
-//! ```ignore
-//! rt_core::conformance_tests!(sah, rt_bvh::Bvh<rt_core::Triangle>, rt_bvh::BvhParams::sah());
+//! ```
+//! // In a structure crate this reads, e.g.:
+//! // rt_core::conformance_tests!(sah, rt_bvh::Bvh<rt_core::Triangle>, rt_bvh::BvhParams::sah());
+//! rt_core::conformance_tests!(reference, rt_core::BruteForce<rt_core::Triangle>, ());
 //! ```
 //!
 //! That expands to a module `sah` with one `#[test]` per adversarial scene plus a proptest run,
@@ -315,8 +317,10 @@ pub fn check_all<A: Accel<Prim = Triangle>>(params: &A::Params) {
 /// Generates a test module with one `#[test]` per adversarial scene and one proptest run, for a
 /// triangle structure type and a parameter expression.
 ///
-/// ```ignore
-/// rt_core::conformance_tests!(median, rt_bvh::Bvh<rt_core::Triangle>, rt_bvh::BvhParams::median());
+/// ```
+/// // For example, in rt-bvh's tests:
+/// // rt_core::conformance_tests!(median, rt_bvh::Bvh<rt_core::Triangle>, rt_bvh::BvhParams::median());
+/// rt_core::conformance_tests!(reference, rt_core::BruteForce<rt_core::Triangle>, ());
 /// ```
 #[macro_export]
 macro_rules! conformance_tests {

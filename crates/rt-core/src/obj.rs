@@ -123,6 +123,19 @@ type ParseResult<T> = Result<T, (Option<usize>, LoadErrorKind)>;
 fn parse_obj(bytes: &[u8]) -> ParseResult<Mesh> {
     let text = decode(bytes)?;
     validate(&text)?;
+    // tobj parses `l` (polyline) elements like faces, so a polyline of three or more points
+    // would become a polygon. Lines are not surfaces: blank them (keeping line numbers).
+    let text: String = text
+        .lines()
+        .map(|l| {
+            if l.split_whitespace().next() == Some("l") {
+                "#"
+            } else {
+                l
+            }
+        })
+        .flat_map(|l| [l, "\n"])
+        .collect();
     let options = tobj::LoadOptions {
         triangulate: false,
         single_index: false,
@@ -329,8 +342,9 @@ fn validate(text: &str) -> ParseResult<()> {
 /// Splits one polygon into triangles by ear clipping in the plane of its Newell normal.
 ///
 /// Degenerate polygons (no normal) and very large ones, where ear clipping's quadratic passes
-/// would cost too much, fall back to a fan. When no ear is found (self-intersecting input), the
-/// first remaining corner is clipped anyway, so the loop always ends after `n - 2` triangles.
+/// would cost too much, fall back to a fan. When no ear is found (self-intersecting input), a
+/// convex corner (or else the first one) is clipped anyway, so the loop always ends after
+/// `n - 2` triangles.
 fn triangulate(face: &[u32], pos: &[Vec3], mut emit: impl FnMut([u32; 3])) {
     const EAR_CLIPPING_LIMIT: usize = 256;
     let n = face.len();
@@ -377,14 +391,28 @@ fn triangulate(face: &[u32], pos: &[Vec3], mut emit: impl FnMut([u32; 3])) {
             if cross(a, b, c) <= 0.0 {
                 return false;
             }
+            // A corner blocks the ear if it lies inside or on it, unless it sits exactly on one
+            // of the ear's corners: keyhole polygons (holes bridged into the outline) repeat
+            // positions, and such a twin must not block the ear it belongs to.
             ring.iter().all(|&j| {
-                j == i0 || j == i1 || j == i2 || {
-                    let q = flat[j];
-                    !(cross(a, b, q) >= 0.0 && cross(b, c, q) >= 0.0 && cross(c, a, q) >= 0.0)
-                }
+                let q = flat[j];
+                j == i0
+                    || j == i1
+                    || j == i2
+                    || q == a
+                    || q == b
+                    || q == c
+                    || !(cross(a, b, q) >= 0.0 && cross(b, c, q) >= 0.0 && cross(c, a, q) >= 0.0)
             })
         };
-        let k = (0..m).find(|&k| is_ear(k)).unwrap_or(0);
+        let convex = |k: usize| {
+            let (i0, i1, i2) = (ring[(k + m - 1) % m], ring[k], ring[(k + 1) % m]);
+            cross(flat[i0], flat[i1], flat[i2]) > 0.0
+        };
+        let k = (0..m)
+            .find(|&k| is_ear(k))
+            .or_else(|| (0..m).find(|&k| convex(k)))
+            .unwrap_or(0);
         emit([
             face[ring[(k + m - 1) % m]],
             face[ring[k]],
@@ -462,7 +490,8 @@ mod tests {
         let e = load("v 0 0 0\nf\n").unwrap_err();
         assert_eq!(e.line, Some(2));
 
-        let e = load("v 0 0 0\nv 1 0 0\nl 1 2\n").unwrap_err();
+        let e =
+            load("v 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nl 1 2\nl 1 2 3 4\np 1 2 3\n").unwrap_err();
         assert_eq!((e.line, e.kind), (None, LoadErrorKind::NoTriangles));
 
         let e = load("").unwrap_err();

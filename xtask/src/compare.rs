@@ -149,7 +149,8 @@ pub fn run(args: &Args) -> Result<Report, String> {
         .num_threads(threads)
         .build()
         .map_err(|e| format!("cannot start {threads} threads: {e}"))?;
-    let report = pool.install(|| measure(args, threads))?;
+    let entries = select_entries(&args.structures)?;
+    let report = pool.install(|| measure(args, threads, entries))?;
     if args.json {
         println!("{}", to_json(&report));
     } else {
@@ -228,8 +229,7 @@ impl Progress {
     }
 }
 
-fn measure(args: &Args, threads: usize) -> Result<Report, String> {
-    let entries = select_entries(&args.structures)?;
+fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Result<Report, String> {
     let (scene, tris) = load_scene(&args.scene)?;
     let valid: Vec<&Triangle> = tris.iter().filter(|t| t.is_valid()).collect();
     if valid.is_empty() {
@@ -578,4 +578,91 @@ fn describe_disagreements(r: &Report, args: &Args) -> String {
         let _ = writeln!(s, "    {}: {:?}", d.structure, d.got);
     }
     s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+    use rt_core::{BuildStats, Stats};
+
+    /// A structure that is wrong on purpose: it loses every hit on an even primitive.
+    struct LosesEvenHits(Bvh<Triangle>);
+
+    impl Accel for LosesEvenHits {
+        type Prim = Triangle;
+        type Params = ();
+        const NAME: &'static str = "broken";
+        fn presets() -> Vec<(&'static str, ())> {
+            vec![("default", ())]
+        }
+        fn build(prims: &[Triangle], _: &()) -> Self {
+            Self(Bvh::build(prims, &BvhParams::sah()))
+        }
+        fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+            self.0
+                .intersect_with(ray, stats)
+                .filter(|h| h.prim % 2 == 1)
+        }
+        fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+            self.intersect_with(ray, stats).is_some()
+        }
+        fn memory_bytes(&self) -> usize {
+            self.0.memory_bytes()
+        }
+        fn build_stats(&self) -> BuildStats {
+            self.0.build_stats()
+        }
+    }
+
+    fn args(extra: &[&str]) -> Args {
+        #[derive(clap::Parser)]
+        struct Wrap {
+            #[command(flatten)]
+            args: Args,
+        }
+        let mut v = vec!["compare"];
+        v.extend_from_slice(extra);
+        Wrap::parse_from(v).args
+    }
+
+    #[test]
+    fn a_wrong_structure_is_caught_on_and_off_the_checked_subset() {
+        // 2,000 rays checked by brute force out of 3,072: disagreements outside the subset must
+        // be found by the cross-check against the other structures.
+        let a = args(&[
+            "--scene",
+            "random-soup",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--check-rays",
+            "2000",
+            "--repeats",
+            "1",
+        ]);
+        let mut entries = structures::all();
+        entries.push(structures::entry_of::<LosesEvenHits>());
+        let report = measure(&a, 1, entries).unwrap();
+        let broken = report.rows.iter().find(|r| r.name == "broken").unwrap();
+        let bvh = report.rows.iter().find(|r| r.name == "bvh").unwrap();
+        assert_eq!(bvh.mismatches, 0);
+        // The broken row loses exactly the rays whose true answer is an even primitive.
+        let expected = bvh
+            .answers
+            .iter()
+            .filter(|a| a.is_some_and(|h| h.prim % 2 == 0))
+            .count();
+        assert!(
+            expected > 100,
+            "the test scene must exercise the broken path"
+        );
+        assert_eq!(broken.mismatches, expected);
+        assert!(
+            report.checked_rays > 2000,
+            "rays outside the subset were settled by brute force"
+        );
+        assert!(!report.disagreements.is_empty());
+    }
 }

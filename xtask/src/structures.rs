@@ -95,7 +95,7 @@ pub struct Entry {
     pub build: Box<dyn Fn(&[Triangle]) -> Box<dyn Traceable> + Send + Sync>,
 }
 
-fn entries_of<A: Accel<Prim = Triangle> + 'static>() -> Vec<Entry> {
+pub fn entries_of<A: Accel<Prim = Triangle> + 'static>() -> Vec<Entry> {
     A::presets()
         .into_iter()
         .enumerate()
@@ -110,6 +110,12 @@ fn entries_of<A: Accel<Prim = Triangle> + 'static>() -> Vec<Entry> {
             }),
         })
         .collect()
+}
+
+/// The default preset of one structure type.
+#[cfg(test)]
+pub fn entry_of<A: Accel<Prim = Triangle> + 'static>() -> Entry {
+    entries_of::<A>().remove(0)
 }
 
 /// Every structure and preset, in report order.

@@ -1,0 +1,216 @@
+//! `cargo xtask compare` as a user runs it: the real binary, its exit status and its output.
+
+use rt_core::conformance::shared_meshes_dir;
+use std::process::{Command, Output};
+
+fn compare(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .arg("compare")
+        .args(args)
+        .output()
+        .expect("xtask runs")
+}
+
+fn json(out: &Output) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "exit {:?}\nstderr: {}",
+        out.status,
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("stdout is one JSON object")
+}
+
+/// Bad input: exit status 2 and exactly one line on stderr, naming the problem.
+fn assert_one_line_error(out: &Output, needle: &str) {
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.lines().count(), 1, "stderr: {err}");
+    assert!(
+        err.starts_with("error: ") && err.contains(needle),
+        "stderr: {err}"
+    );
+    assert!(out.stdout.is_empty());
+}
+
+#[test]
+fn missing_file_unknown_scene_and_unknown_structure_are_one_line_errors() {
+    assert_one_line_error(
+        &compare(&["--scene", "no/such/file.obj"]),
+        "no/such/file.obj: cannot read file",
+    );
+    assert_one_line_error(
+        &compare(&["--scene", "atlantis"]),
+        "built-in scenes: sphereflake",
+    );
+    assert_one_line_error(
+        &compare(&["--structures", "bvh,octopus"]),
+        "unknown structure `octopus`",
+    );
+    assert_one_line_error(
+        &compare(&["--rays-file", "no/such.rays"]),
+        "no/such.rays: cannot read file",
+    );
+}
+
+#[test]
+fn malformed_and_empty_obj_files_are_one_line_errors() {
+    let Some(dir) = shared_meshes_dir() else {
+        return;
+    };
+    let bad = dir.join("bad");
+    let malformed = bad.join("malformed.obj");
+    assert_one_line_error(
+        &compare(&["--scene", malformed.to_str().unwrap()]),
+        "malformed.obj:23: vertex index 12",
+    );
+    let empty = bad.join("empty.obj");
+    assert_one_line_error(
+        &compare(&["--scene", empty.to_str().unwrap()]),
+        "empty.obj: no triangles",
+    );
+    let points = bad.join("testpoints.obj");
+    assert_one_line_error(
+        &compare(&["--scene", points.to_str().unwrap()]),
+        "no triangles",
+    );
+}
+
+#[test]
+fn help_lists_built_in_scenes_and_rows() {
+    let out = compare(&["--help"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    for needle in [
+        "sphereflake",
+        "random-soup",
+        "bvh-median",
+        "--rays-file",
+        "--json",
+    ] {
+        assert!(text.contains(needle), "--help lacks {needle}");
+    }
+}
+
+#[test]
+fn default_scene_json_has_every_field_and_no_mismatch() {
+    let v = json(&compare(&[
+        "--width",
+        "64",
+        "--height",
+        "48",
+        "--json",
+        "--repeats",
+        "1",
+    ]));
+    assert_eq!(v["scene"], "sphereflake");
+    assert_eq!(v["ray_kind"], "primary");
+    assert_eq!(v["rays"], 64 * 48);
+    assert_eq!(v["triangles"], 82_002);
+    let rows = v["results"].as_array().unwrap();
+    let names: Vec<&str> = rows
+        .iter()
+        .map(|r| r["structure"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["brute-force", "bvh", "bvh-median", "bvh-middle"]);
+    for r in rows {
+        for field in [
+            "structure",
+            "build_ms",
+            "memory_bytes",
+            "nodes",
+            "max_depth",
+            "hits",
+            "mismatches",
+            "avg_visits",
+            "avg_prim_tests",
+            "mrays_per_s",
+        ] {
+            assert!(!r[field].is_null(), "{field} missing in {r}");
+        }
+        assert_eq!(r["mismatches"], 0, "{r}");
+    }
+    // Brute force tests every triangle on every ray.
+    assert_eq!(rows[0]["avg_prim_tests"], 82_002.0);
+}
+
+#[test]
+fn rays_file_replays_exactly_and_reports_every_answer() {
+    let dir = std::env::temp_dir().join(format!("rt-accel-cli-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("rays.txt");
+    std::fs::write(
+        &file,
+        "# three rays at the sphereflake\n0 0 10 0 0 -1\n0 5 0 0 -1 0 0 2.5\n10 10 10 1 0 0 # points away\n",
+    )
+    .unwrap();
+    let v = json(&compare(&[
+        "--rays-file",
+        file.to_str().unwrap(),
+        "--json",
+        "--structures",
+        "bvh",
+    ]));
+    std::fs::remove_dir_all(&dir).ok();
+    assert_eq!(v["ray_kind"], "file");
+    assert_eq!(v["rays"], 3);
+    let rows = v["results"].as_array().unwrap();
+    let answers: Vec<&Vec<serde_json::Value>> = rows
+        .iter()
+        .map(|r| r["ray_hits"].as_array().unwrap())
+        .collect();
+    assert_eq!(
+        answers[0], answers[1],
+        "bvh and brute force agree ray by ray"
+    );
+    // The first ray meets the flake; the second stops at y = 2.5, above the flake (whose spheres
+    // reach y < 2); the third points away from everything.
+    assert!(answers[0][0]["t"].as_f64().unwrap() > 0.0);
+    assert!(answers[0][1].is_null());
+    assert!(answers[0][2].is_null());
+}
+
+/// The acceptance runs on the bunny, at a reduced image size so the suite stays quick:
+/// no mismatch for primary, incoherent and shadow rays; and, on primary rays, the SAH tree
+/// needs at most 12 primitive tests per ray and fewer than the median split.
+#[test]
+fn bunny_all_ray_kinds_agree_and_sah_beats_median() {
+    let Some(dir) = shared_meshes_dir() else {
+        return;
+    };
+    let bunny = dir.join("stanford-bunny.obj");
+    for kind in ["primary", "incoherent", "shadow"] {
+        let v = json(&compare(&[
+            "--scene",
+            bunny.to_str().unwrap(),
+            "--rays",
+            kind,
+            "--width",
+            "128",
+            "--height",
+            "96",
+            "--check-rays",
+            "1500",
+            "--repeats",
+            "1",
+            "--json",
+        ]));
+        let rows = v["results"].as_array().unwrap();
+        for r in rows {
+            assert_eq!(r["mismatches"], 0, "{kind}: {r}");
+        }
+        if kind == "primary" {
+            let tests = |name: &str| {
+                rows.iter().find(|r| r["structure"] == name).unwrap()["avg_prim_tests"]
+                    .as_f64()
+                    .unwrap()
+            };
+            assert!(tests("bvh") <= 12.0, "SAH: {} tests per ray", tests("bvh"));
+            assert!(
+                tests("bvh") < tests("bvh-median"),
+                "SAH {} vs median {}",
+                tests("bvh"),
+                tests("bvh-median")
+            );
+        }
+    }
+}

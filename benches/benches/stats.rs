@@ -32,15 +32,15 @@ fn control(bvh: &Bvh<Triangle>, ray: &Ray) -> Option<Hit> {
         let node = &nodes[current];
         if node.is_leaf() {
             for i in node.prim_range() {
-                if let Some(h) = prims[i].intersect(ray, best.t) {
-                    if Hit::beats(h.t, ids[i], best.t, best.prim) {
-                        best = Hit {
-                            prim: ids[i],
-                            t: h.t,
-                            u: h.u,
-                            v: h.v,
-                        };
-                    }
+                if let Some(h) = prims[i].intersect(ray, best.t)
+                    && Hit::beats(h.t, ids[i], best.t, best.prim)
+                {
+                    best = Hit {
+                        prim: ids[i],
+                        t: h.t,
+                        u: h.u,
+                        v: h.v,
+                    };
                 }
             }
         } else {

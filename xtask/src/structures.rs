@@ -88,11 +88,14 @@ impl<A: Accel<Prim = Triangle>> Traceable for Built<A> {
     }
 }
 
+/// Builds one row's structure over a scene.
+pub type Builder = Box<dyn Fn(&[Triangle]) -> Box<dyn Traceable> + Send + Sync>;
+
 /// One row `compare` can run: a structure type with one preset.
 pub struct Entry {
     /// Row name: the crate name without `rt-` for the default preset, `name-preset` otherwise.
     pub name: String,
-    pub build: Box<dyn Fn(&[Triangle]) -> Box<dyn Traceable> + Send + Sync>,
+    pub build: Builder,
 }
 
 pub fn entries_of<A: Accel<Prim = Triangle> + 'static>() -> Vec<Entry> {

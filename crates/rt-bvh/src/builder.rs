@@ -286,7 +286,7 @@ fn split_sah(
     }
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, plane)
     for axis in 0..3 {
-        if !(extent[axis] > 0.0) {
+        if extent[axis] <= 0.0 {
             continue;
         }
         let (bb, bc) = (&bin_bounds[axis], &bin_counts[axis]);
@@ -319,7 +319,9 @@ fn split_sah(
     };
     let split_cost = params.traversal_cost + params.intersection_cost * cost / bounds.half_area();
     let leaf_cost = params.intersection_cost * n as f32;
-    if n <= max_leaf && !(split_cost < leaf_cost) {
+    // A NaN cost (a zero-area node) does not pay either.
+    let split_pays = split_cost < leaf_cost;
+    if n <= max_leaf && !split_pays {
         return None;
     }
     // Partition, accumulating both children's bounds on the way so they need no extra pass.

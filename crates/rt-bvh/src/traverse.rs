@@ -48,15 +48,15 @@ impl<P: Primitive> Bvh<P> {
                                 v: 0.0,
                             });
                         }
-                    } else if let Some(h) = self.prims[i].intersect(ray, best.t) {
-                        if Hit::beats(h.t, id, best.t, best.prim) {
-                            best = Hit {
-                                prim: id,
-                                t: h.t,
-                                u: h.u,
-                                v: h.v,
-                            };
-                        }
+                    } else if let Some(h) = self.prims[i].intersect(ray, best.t)
+                        && Hit::beats(h.t, id, best.t, best.prim)
+                    {
+                        best = Hit {
+                            prim: id,
+                            t: h.t,
+                            u: h.u,
+                            v: h.v,
+                        };
                     }
                 }
             } else {

@@ -141,7 +141,6 @@ fn parse_obj(bytes: &[u8]) -> ParseResult<Mesh> {
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
-        ..Default::default()
     };
     let loaded = std::panic::catch_unwind(|| {
         tobj::load_obj_buf(&mut Cursor::new(text.as_bytes()), &options, |_| {

@@ -37,7 +37,7 @@ impl Sphere {
         let l = f - (b / a) * ray.dir;
         let r2 = self.radius * self.radius;
         let disc = r2 - l.length_squared();
-        if !(disc >= 0.0) {
+        if disc < 0.0 || disc.is_nan() {
             return None;
         }
         let c = f.length_squared() - r2;

@@ -59,8 +59,8 @@ impl Triangle {
         let inv = 1.0 / det;
         let s = ray.origin - self.v0;
         let u = s.dot(p) * inv;
-        // Written so that NaN fails every test.
-        if !(u >= 0.0 && u <= 1.0) {
+        // `contains` is false for NaN, so non-finite input fails every test.
+        if !(0.0..=1.0).contains(&u) {
             return None;
         }
         let q = s.cross(e1);

@@ -6,6 +6,9 @@
 use rt_core::conformance::shared_meshes_dir;
 use rt_core::{LoadErrorKind, Primitive, load_obj};
 
+/// Triangles, or the error's line and the name of its kind.
+type Expected = Result<usize, (Option<usize>, &'static str)>;
+
 /// Every file in `bad/` gives a mesh or a clear error, and each gives the one we expect.
 #[test]
 fn bad_files_give_a_mesh_or_a_clear_error() {
@@ -14,7 +17,7 @@ fn bad_files_give_a_mesh_or_a_clear_error() {
     };
     let dir = dir.join("bad");
     // (file, Ok(triangles) or Err((line, kind)))
-    let expected: &[(&str, Result<usize, (Option<usize>, &str)>)] = &[
+    let expected: &[(&str, Expected)] = &[
         ("box_UTF16BE.obj", Ok(12)),
         // One face repeats the corners 1 2 3 4 many times: ear clipping cannot find ears in a
         // polygon that overlaps itself, so it clips corners in order; still n - 2 triangles.

@@ -259,7 +259,9 @@ fn split_sah(
     let n = refs.len();
     // PERF: a node of n primitives gets min(bins, max(n, 4)) buckets; a small node needs no more
     // planes than it has primitives, and initializing and sweeping 3 × 16 buckets dominated the
-    // cost of the ~38k small nodes of the bunny (SAH build 51.6 -> see the README's table).
+    // cost of the ~38k small nodes of the bunny: SAH build 51.6 ms -> 40.1 ms with the same
+    // tree quality (6.8 visits, 0.8 tests per primary ray), measured with `cargo xtask compare
+    // --scene ../shared/meshes/stanford-bunny.obj --structures bvh`.
     let bins = bins.min(n.max(4));
     let extent = cbounds.max - cbounds.min;
     let bins_f = bins as f32;

@@ -206,6 +206,9 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &BvhParams) -> Built<P> {
             }
         }
     }
+    // The node count is only known now; drop the spare capacity so the structure holds (and
+    // `memory_bytes` reports) what it needs.
+    nodes.shrink_to_fit();
     let prims_out = refs.iter().map(|r| prims[r.id as usize].clone()).collect();
     let ids = refs.iter().map(|r| r.id).collect();
     Built {

@@ -118,13 +118,6 @@ impl Mesh {
         self.indices
             .extend(other.indices.iter().map(|t| t.map(|i| i + base)));
     }
-
-    /// Applies `f` to every position.
-    pub fn transform(&mut self, f: impl Fn(Vec3) -> Vec3) {
-        for p in &mut self.positions {
-            *p = f(*p);
-        }
-    }
 }
 
 #[cfg(test)]

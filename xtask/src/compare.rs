@@ -218,6 +218,10 @@ impl Progress {
         if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} {msg} ({elapsed})") {
             bar.set_style(style);
         }
+        if visible {
+            // Brute force can take seconds in one step; keep the elapsed time moving.
+            bar.enable_steady_tick(Duration::from_millis(250));
+        }
         Self(bar)
     }
     fn step(&self, msg: String) {

@@ -252,7 +252,7 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
         return Err(format!("no rays to trace ({ray_kind} rays on {scene})"));
     }
     let progress = Progress::new(
-        2 * entries.len() as u64 + 3,
+        2 * entries.len() as u64 + 2, // build and trace per row, brute force, cross-check
         std::io::stdout().is_terminal() && !args.json,
     );
 

@@ -60,6 +60,25 @@
 //! assert_eq!((hit.prim, hit.t), (1, 2.0));
 //! assert!(bvh.validate().is_ok());
 //! ```
+//!
+//! Loading a mesh, as in the README (compiled, not run: the file is yours):
+//! ```no_run
+//! # fn main() -> Result<(), Box<dyn std::error::Error>> {
+//! use rt_bvh::{Bvh, BvhParams};
+//! use rt_core::{Accel, Ray, glam::Vec3};
+//!
+//! let mesh = rt_core::load_obj("bunny.obj")?; // typed error naming file and line
+//! let bvh = Bvh::build(&mesh.triangles(), &BvhParams::sah());
+//! let ray = Ray::new(Vec3::new(0.0, 0.1, 1.0), Vec3::new(0.0, 0.0, -1.0));
+//! if let Some(hit) = bvh.intersect(&ray) {
+//!     // closest hit: triangle index, t, u, v
+//!     println!("triangle {} at t = {}", hit.prim, hit.t);
+//! }
+//! let in_shadow = bvh.occluded(&ray); // any hit, stops at the first
+//! # let _ = in_shadow;
+//! # Ok(())
+//! # }
+//! ```
 #![warn(missing_docs)]
 
 mod builder;

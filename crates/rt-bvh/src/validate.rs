@@ -120,3 +120,59 @@ impl<P: Primitive> Bvh<P> {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::{Bvh, BvhParams};
+    use rt_core::{Accel, Triangle, scenes};
+
+    fn tree() -> Bvh<Triangle> {
+        Bvh::build(&scenes::random_soup(500, 1).triangles(), &BvhParams::sah())
+    }
+
+    /// `validate` accepts a built tree and rejects each kind of corruption it claims to detect.
+    #[test]
+    fn detects_each_broken_invariant() {
+        assert_eq!(tree().validate(), Ok(()));
+
+        let first_leaf = |b: &Bvh<Triangle>| b.nodes.iter().position(|n| n.is_leaf()).unwrap();
+        let first_interior = |b: &Bvh<Triangle>| b.nodes.iter().position(|n| !n.is_leaf()).unwrap();
+
+        let mut b = tree();
+        let i = first_interior(&b);
+        b.nodes[i].bounds.max.x -= 0.5;
+        assert!(
+            b.validate()
+                .unwrap_err()
+                .message
+                .contains("not inside its parent")
+        );
+
+        let mut b = tree();
+        let i = first_leaf(&b);
+        b.nodes[i].bounds.min.y += 0.5;
+        assert!(b.validate().is_err());
+
+        let mut b = tree();
+        let i = first_leaf(&b);
+        b.nodes[i].index += 1; // overlaps the next leaf's first slot and drops its own
+        assert!(b.validate().is_err());
+
+        let mut b = tree();
+        b.nodes[0].index = 0; // second child pointing backwards
+        assert!(
+            b.validate()
+                .unwrap_err()
+                .message
+                .contains("out of order or range")
+        );
+
+        let mut b = tree();
+        b.ids[3] = b.ids[4];
+        assert!(b.validate().unwrap_err().message.contains("appears twice"));
+
+        let mut b = tree();
+        b.ids.pop();
+        assert!(b.validate().is_err());
+    }
+}

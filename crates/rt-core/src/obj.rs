@@ -545,3 +545,54 @@ mod tests {
         assert_eq!(load(&text).unwrap().triangle_count(), 1198);
     }
 }
+
+#[cfg(test)]
+mod fuzz {
+    use super::*;
+    use proptest::prelude::*;
+
+    /// OBJ-ish lines: valid and broken vertices and faces, other keywords, junk.
+    fn line() -> impl Strategy<Value = String> {
+        let num = prop_oneof![
+            (-1000i32..1000).prop_map(|i| (i as f32 / 7.0).to_string()),
+            Just("nan".to_string()),
+            Just("inf".to_string()),
+            Just("1e40".to_string()),
+            Just("3.1+e2".to_string()),
+            "[a-z0-9.+-]{0,4}",
+        ];
+        let index = prop_oneof![(-12i64..12).prop_map(|i| i.to_string()), "[0-9/-]{0,6}"];
+        prop_oneof![
+            prop::collection::vec(num, 0..5).prop_map(|v| format!("v {}", v.join(" "))),
+            prop::collection::vec(index.clone(), 0..8).prop_map(|v| format!("f {}", v.join(" "))),
+            prop::collection::vec(index, 0..5).prop_map(|v| format!("l {}", v.join(" "))),
+            Just("vt 0 0".to_string()),
+            Just("vn 0 0 1".to_string()),
+            Just("o thing".to_string()),
+            Just("usemtl missing".to_string()),
+            "\\PC{0,20}",
+        ]
+    }
+
+    proptest! {
+        /// Whatever the text, loading returns a mesh whose indices are all in range, or an
+        /// error; it never panics.
+        #[test]
+        fn never_panics(lines in prop::collection::vec(line(), 0..30)) {
+            match load_obj_bytes("fuzz.obj", lines.join("\n").as_bytes()) {
+                Ok(mesh) => {
+                    prop_assert!(mesh.triangle_count() > 0);
+                    let n = mesh.positions().len() as u32;
+                    prop_assert!(mesh.indices().iter().flatten().all(|&i| i < n));
+                }
+                Err(e) => prop_assert!(!e.to_string().is_empty()),
+            }
+        }
+
+        /// Arbitrary bytes, too.
+        #[test]
+        fn never_panics_on_bytes(bytes in prop::collection::vec(any::<u8>(), 0..400)) {
+            let _ = load_obj_bytes("bytes.obj", &bytes);
+        }
+    }
+}

@@ -38,13 +38,14 @@
 //!
 //! | preset | build ms | nodes | depth | visits/ray | tests/ray | Mrays/s |
 //! | --- | ---: | ---: | ---: | ---: | ---: | ---: |
-//! | `sah` | 42.2 | 77,359 | 19 | 6.8 | 0.8 | 19.5 |
-//! | `median` | 13.7 | 40,597 | 15 | 8.0 | 2.4 | 12.2 |
-//! | `middle` | 16.9 | 44,817 | 20 | 7.4 | 1.8 | 13.8 |
+//! | `sah` | 42.1 | 77,359 | 19 | 6.8 | 0.8 | 20.6 |
+//! | `median` | 14.1 | 40,597 | 15 | 8.0 | 2.4 | 14.2 |
+//! | `middle` | 14.1 | 44,817 | 20 | 7.4 | 1.8 | 16.8 |
 //!
-//! Single-threaded on the same rays at 512×384, `cargo bench -p rt-benches --bench trace` gives
-//! the SAH tree 0.99× the speed of `obvhs` (PLOC with reinsertion, its slow preset) and 2.5× that
-//! of the `bvh` crate; its build takes 36.0 ms against obvhs' 18.7 ms (medium preset).
+//! Single-threaded on the same triangles and rays at 512×384, one run of `cargo bench -p
+//! rt-benches --bench trace` gives the SAH tree 1.15× the speed of `obvhs` (PLOC with
+//! reinsertion, its slow preset) on the bunny and 0.90× on the sphereflake, and 2.7–3.1× that of
+//! the `bvh` crate; its build takes 36.3 ms on the bunny against obvhs' 19.5 ms (medium preset).
 //!
 //! # Example
 //! ```

@@ -8,9 +8,9 @@ use glam::{DVec3, Vec3};
 /// As a [`Primitive`] it uses the watertight test ([`Triangle::intersect_watertight`], Woop,
 /// Benthin & Wald 2013). That is the default because it is the only one of the two that never
 /// lets a ray slip through the shared edge or vertex of two triangles, so the conformance kit
-/// can demand that every structure finds such hits. It costs 1.22× the time of Möller–Trumbore
-/// per test (22.7 vs 18.6 ms for a million tests, `cargo bench -p rt-benches --bench
-/// primitives`), and about 4% of a BVH's primary-ray speed on the bunny (8.57 vs 8.92 Mrays/s,
+/// can demand that every structure finds such hits. It costs 1.28× the time of Möller–Trumbore
+/// per test (23.7 vs 18.5 ms for a million tests, `cargo bench -p rt-benches --bench
+/// primitives`), and 0–5% of a BVH's primary-ray speed (bunny 9.03 vs 9.24 Mrays/s,
 /// `--bench trace`); wrap triangles in [`MtTriangle`] to use Möller–Trumbore instead.
 ///
 /// Zero-area triangles (and triangles with a non-finite vertex) are invalid: they never report a

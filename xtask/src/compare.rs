@@ -89,8 +89,11 @@ pub struct Row {
     pub memory_bytes: usize,
     pub nodes: usize,
     pub leaves: usize,
+    pub empty_leaves: usize,
     pub max_depth: usize,
     pub avg_leaf_prims: f64,
+    pub prim_refs: usize,
+    pub duplication: f64,
     pub rays_traced: usize,
     pub hits: usize,
     pub mismatches: usize,
@@ -446,8 +449,11 @@ fn trace_row(
         memory_bytes: s.memory_bytes(),
         nodes: stats.nodes,
         leaves: stats.leaves,
+        empty_leaves: stats.empty_leaves,
         max_depth: stats.max_depth,
         avg_leaf_prims: stats.avg_prims_per_leaf(),
+        prim_refs: stats.prim_refs,
+        duplication: stats.duplication(),
         rays_traced: rays.len(),
         hits,
         mismatches: 0,
@@ -468,12 +474,10 @@ fn to_table(r: &Report) -> String {
     );
     let _ = writeln!(
         s,
-        "{:<14} {:>9} {:>11} {:>8} {:>5} {:>10} {:>10} {:>9} {:>9} {:>10}",
+        "{:<16} {:>9} {:>11} {:>10} {:>10} {:>9} {:>9} {:>10}",
         "structure",
         "build ms",
         "memory MiB",
-        "nodes",
-        "depth",
         "visits/ray",
         "tests/ray",
         "Mrays/s",
@@ -483,17 +487,34 @@ fn to_table(r: &Report) -> String {
     for row in &r.rows {
         let _ = writeln!(
             s,
-            "{:<14} {:>9.1} {:>11.2} {:>8} {:>5} {:>10.1} {:>10.1} {:>9} {:>8.0}x {:>10}",
+            "{:<16} {:>9.1} {:>11.2} {:>10.1} {:>10.1} {:>9} {:>8.0}x {:>10}",
             row.name,
             row.build_ms,
             row.memory_bytes as f64 / (1024.0 * 1024.0),
-            row.nodes,
-            row.max_depth,
             row.avg_visits,
             row.avg_prim_tests,
             three_digits(row.mrays_per_s),
             row.speedup,
             row.mismatches
+        );
+    }
+    // The shape of each structure: what the build produced, independent of the rays.
+    let _ = writeln!(
+        s,
+        "\n{:<16} {:>9} {:>5} {:>9} {:>7} {:>10} {:>9}",
+        "structure", "nodes", "depth", "leaves", "empty", "prims/leaf", "refs/prim"
+    );
+    for row in r.rows.iter().filter(|row| row.leaves > 0) {
+        let _ = writeln!(
+            s,
+            "{:<16} {:>9} {:>5} {:>9} {:>6.1}% {:>10.2} {:>9.2}",
+            row.name,
+            row.nodes,
+            row.max_depth,
+            row.leaves,
+            100.0 * row.empty_leaves as f64 / row.leaves as f64,
+            row.avg_leaf_prims,
+            row.duplication
         );
     }
     if r.rows.len() > 1 && r.total_mismatches() == 0 {
@@ -545,7 +566,10 @@ fn to_json(r: &Report) -> String {
                 "mrays_per_s": row.mrays_per_s,
                 "speedup": row.speedup,
                 "leaves": row.leaves,
+                "empty_leaves": row.empty_leaves,
                 "avg_leaf_prims": row.avg_leaf_prims,
+                "prim_refs": row.prim_refs,
+                "duplication": row.duplication,
                 "rays_traced": row.rays_traced,
             });
             if r.per_ray_answers {

@@ -7,6 +7,7 @@
 use rayon::prelude::*;
 use rt_bvh::Bvh;
 use rt_core::{Accel, BruteForce, BuildStats, Counters, Hit, Ray, Triangle};
+use rt_kdtree::KdTree;
 
 /// Which query a run makes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -123,7 +124,9 @@ pub fn entry_of<A: Accel<Prim = Triangle> + 'static>() -> Entry {
 
 /// Every structure and preset, in report order.
 pub fn all() -> Vec<Entry> {
-    entries_of::<Bvh<Triangle>>()
+    let mut all = entries_of::<Bvh<Triangle>>();
+    all.extend(entries_of::<KdTree<Triangle>>());
+    all
 }
 
 /// The brute-force reference.

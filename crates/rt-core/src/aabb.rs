@@ -120,6 +120,21 @@ impl Aabb {
         o.is_empty() || (self.min.cmple(o.min).all() && o.max.cmple(self.max).all())
     }
 
+    /// True if the closed boxes share at least one point (touching counts).
+    #[inline]
+    pub fn overlaps(&self, o: &Self) -> bool {
+        self.min.cmple(o.max).all() && o.min.cmple(self.max).all()
+    }
+
+    /// The common part of two boxes; empty (see [`Aabb::is_empty`]) if they do not overlap.
+    #[inline]
+    pub fn intersection(&self, o: &Self) -> Self {
+        Self {
+            min: self.min.max(o.min),
+            max: self.max.min(o.max),
+        }
+    }
+
     /// Whether the point lies inside this box (boundaries included).
     #[inline]
     pub fn contains_point(&self, p: Vec3) -> bool {

@@ -160,6 +160,8 @@ pub const SCENES: &[&str] = &[
     "large_coordinates",
     "nan_vertex",
     "exponential_chain",
+    "planar_triangles",
+    "spanning_triangles",
 ];
 
 /// The adversarial scene called `name` (one of [`SCENES`]).
@@ -182,6 +184,8 @@ pub fn scene(name: &str) -> Scene {
         "origins_inside" => origins_inside(),
         "large_coordinates" => large_coordinates(),
         "nan_vertex" => nan_vertex(),
+        "planar_triangles" => planar_triangles(),
+        "spanning_triangles" => spanning_triangles(),
         "exponential_chain" => exponential_chain(),
         _ => panic!("unknown conformance scene `{name}`; see rt_core::conformance::SCENES"),
     }
@@ -334,7 +338,8 @@ macro_rules! conformance_tests {
             $crate::conformance_tests!(@scenes $accel;
                 empty_scene one_triangle shared_edge identical_triangles equal_centroids
                 zero_area_triangles axis_parallel_rays rays_in_box_faces origins_inside
-                large_coordinates nan_vertex exponential_chain);
+                large_coordinates nan_vertex exponential_chain planar_triangles
+                spanning_triangles);
             #[test]
             fn random_scenes() {
                 $crate::conformance::check_random::<$accel>(&params());
@@ -700,6 +705,90 @@ fn nan_vertex() -> Scene {
 /// 120 parallel triangles at `x = 1.5^k`: every builder that splits space or centroids in the
 /// middle peels off one triangle per level, so the tree is as deep as its builder allows, and a
 /// traversal stack must not overflow.
+/// Axis-aligned triangles lying in a few shared planes (x, y or z in {-1, 0, 1}), overlapping
+/// each other, plus tilted ones with a vertex in those planes: the planes are split candidates
+/// with primitives lying in them. Rays run inside the planes (axis-parallel and diagonal), cross
+/// them at vertices, and hit them head-on.
+fn planar_triangles() -> Scene {
+    let mut rng = Rng::new(13);
+    let planes = [-1.0f32, 0.0, 1.0];
+    let lattice = |r: &mut Rng| (r.below(9) as f32 - 4.0) * 0.25;
+    let mut triangles = Vec::new();
+    for axis in 0..3 {
+        for &c in &planes {
+            for k in 0..10 {
+                let mut v = [Vec3::ZERO; 3];
+                for p in &mut v {
+                    *p = Vec3::new(lattice(&mut rng), lattice(&mut rng), lattice(&mut rng));
+                    p[axis] = c;
+                }
+                // Every other one tilted out of the plane by one vertex.
+                if k % 2 == 1 {
+                    v[2][axis] = c + 0.5;
+                }
+                let t = Triangle::new(v[0], v[1], v[2]);
+                if t.is_valid() {
+                    triangles.push(t);
+                }
+            }
+        }
+    }
+    let mut rays = Vec::new();
+    for axis in 0..3 {
+        for &c in &planes {
+            for _ in 0..40 {
+                // In the plane: origin on it, direction with a zero component along `axis`.
+                let mut o =
+                    Vec3::new(lattice(&mut rng), lattice(&mut rng), lattice(&mut rng)) * 3.0;
+                o[axis] = c;
+                let mut d = rng.unit_vector();
+                d[axis] = if rng.below(2) == 0 { 0.0 } else { -0.0 };
+                if d.length_squared() > 0.0 {
+                    rays.push(Ray::new(o, d));
+                }
+                // Through the plane at a lattice point, and head-on.
+                let mut target = Vec3::new(lattice(&mut rng), lattice(&mut rng), lattice(&mut rng));
+                target[axis] = c;
+                let from = rng.in_box(Vec3::splat(-3.0), Vec3::splat(3.0));
+                if from != target {
+                    rays.push(Ray::new(from, target - from));
+                }
+                let mut head_on = target;
+                head_on[axis] = c + 2.0;
+                let mut d = Vec3::ZERO;
+                d[axis] = -1.0;
+                rays.push(Ray::new(head_on, d));
+            }
+        }
+    }
+    Scene { triangles, rays }
+}
+
+/// A few large triangles spanning the whole scene among many small ones, so a ray often hits a
+/// large triangle in a cell beyond the current one while a closer small triangle waits in the
+/// next cell: structures that stop at the first hit found, instead of the first hit inside the
+/// current cell, fail here.
+fn spanning_triangles() -> Scene {
+    let mut rng = Rng::new(14);
+    let mut triangles = soup(&mut rng, 400, Vec3::splat(-1.0), Vec3::ONE, 0.08);
+    for _ in 0..12 {
+        let p = |r: &mut Rng| r.in_box(Vec3::splat(-1.5), Vec3::splat(1.5));
+        let t = Triangle::new(p(&mut rng), p(&mut rng), p(&mut rng));
+        if t.is_valid() {
+            triangles.push(t);
+        }
+    }
+    let mut rays = random_rays(&mut rng, Vec3::splat(-2.0), Vec3::splat(2.0), 400);
+    rays.extend(aimed_rays(
+        &mut rng,
+        &triangles,
+        Vec3::splat(-2.0),
+        Vec3::splat(2.0),
+        400,
+    ));
+    Scene { triangles, rays }
+}
+
 fn exponential_chain() -> Scene {
     let mut triangles = Vec::new();
     for k in 0..120 {

@@ -32,6 +32,8 @@
 mod aabb;
 mod accel;
 mod brute;
+mod clip;
+mod mailbox;
 mod mesh;
 mod obj;
 mod primitive;
@@ -49,6 +51,8 @@ pub mod conformance;
 pub use aabb::{Aabb, SLAB_FAR_SCALE};
 pub use accel::{Accel, BuildStats, Hit};
 pub use brute::BruteForce;
+pub use clip::{clip_triangle_bounds, split_triangle_bounds};
+pub use mailbox::Mailbox;
 pub use mesh::{IndexOutOfRange, Mesh};
 pub use obj::{LoadError, LoadErrorKind, load_obj, load_obj_bytes};
 pub use primitive::{PrimHit, Primitive};

@@ -40,6 +40,34 @@ pub trait Primitive: Clone + Send + Sync + Debug + 'static {
     /// build time, so a triangle with a NaN vertex is never reported and never widens a box.
     fn is_valid(&self) -> bool;
 
+    /// Bounds of the part of the primitive inside the closed box `cell`, or `None` if the
+    /// primitive does not meet it. Spatial subdivisions use this to reference a primitive only
+    /// from cells it really overlaps, and kd-tree builders for "perfect splits".
+    ///
+    /// The result must contain every point of the primitive in `cell` and lie inside `cell`. The
+    /// default, the primitive's bounds cut to the cell, is always correct but loose; [`Triangle`]
+    /// clips exactly.
+    ///
+    /// [`Triangle`]: crate::Triangle
+    #[inline]
+    fn clip_bounds(&self, cell: &Aabb) -> Option<Aabb> {
+        let b = self.bounds();
+        b.overlaps(cell).then(|| b.intersection(cell))
+    }
+
+    /// [`clip_bounds`](Primitive::clip_bounds) for both halves of `cell` split at
+    /// `x[axis] = pos`: left `x[axis] <= pos`, right `x[axis] >= pos`.
+    ///
+    /// The default clips twice; [`Triangle`](crate::Triangle) clips once and splits the polygon.
+    #[inline]
+    fn split_bounds(&self, cell: &Aabb, axis: usize, pos: f32) -> (Option<Aabb>, Option<Aabb>) {
+        let mut left = *cell;
+        left.max[axis] = pos;
+        let mut right = *cell;
+        right.min[axis] = pos;
+        (self.clip_bounds(&left), self.clip_bounds(&right))
+    }
+
     /// The hit with `ray.t_min <= t <= t_max`, if any. Both ends are inclusive so that a structure
     /// that shrinks `t_max` to the closest hit so far still finds an equally close hit on a
     /// primitive with a smaller index (the tie rule of [`Accel`](crate::Accel)).

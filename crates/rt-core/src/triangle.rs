@@ -186,6 +186,16 @@ impl Primitive for Triangle {
     }
 
     #[inline]
+    fn clip_bounds(&self, cell: &Aabb) -> Option<Aabb> {
+        crate::clip_triangle_bounds([self.v0, self.v1, self.v2], cell)
+    }
+
+    #[inline]
+    fn split_bounds(&self, cell: &Aabb, axis: usize, pos: f32) -> (Option<Aabb>, Option<Aabb>) {
+        crate::split_triangle_bounds([self.v0, self.v1, self.v2], cell, axis, pos)
+    }
+
+    #[inline]
     fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
         self.intersect_watertight(ray, t_max)
     }
@@ -209,6 +219,14 @@ impl Primitive for MtTriangle {
     }
     fn is_valid(&self) -> bool {
         self.0.is_valid()
+    }
+    #[inline]
+    fn clip_bounds(&self, cell: &Aabb) -> Option<Aabb> {
+        self.0.clip_bounds(cell)
+    }
+    #[inline]
+    fn split_bounds(&self, cell: &Aabb, axis: usize, pos: f32) -> (Option<Aabb>, Option<Aabb>) {
+        self.0.split_bounds(cell, axis, pos)
     }
     #[inline]
     fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {

@@ -1,0 +1,346 @@
+//! Clipping a triangle to a box: the exact part of a triangle that lies in a cell.
+//!
+//! Spatial subdivisions (kd-trees, grids, octrees) reference a triangle from every cell it
+//! overlaps. Using the triangle's bounding box instead over-counts: a long diagonal triangle's box
+//! covers many cells the triangle never touches. Clipping the triangle polygon to the cell
+//! (Sutherland–Hodgman against the six slab planes) gives both the exact overlap test and the
+//! tight bounds of the part inside, which kd-tree builders use for "perfect splits" (Havran
+//! 2000; Wald & Havran 2006).
+
+use crate::Aabb;
+use glam::{DVec3, Vec3};
+
+/// The bounds of the part of triangle `v` that lies in `cell` (closed), or `None` if the two do
+/// not meet.
+///
+/// The result is conservative: it is computed in `f64` and rounded outwards to `f32`, then
+/// intersected with `cell`, so it always contains the exact clipped polygon and never leaves the
+/// cell. A triangle that only touches the cell (a vertex or an edge on a face) gives a flat or
+/// degenerate box, not `None`.
+///
+/// Non-finite vertices or an empty `cell` give `None`.
+pub fn clip_triangle_bounds(v: [Vec3; 3], cell: &Aabb) -> Option<Aabb> {
+    let mut poly = Polygon::default();
+    match clip_to_cell(v, cell, &mut poly)? {
+        Clipped::Whole(b) => Some(b),
+        Clipped::Polygon => Some(poly.bounds(cell)),
+    }
+}
+
+/// The bounds of the parts of triangle `v` in the two halves of `cell` split at `x[axis] = pos`
+/// (left: `x[axis] <= pos`, right: `x[axis] >= pos`), each `None` if the triangle does not meet
+/// that half.
+///
+/// Equal to [`clip_triangle_bounds`] on each half, with the same guarantees, but the triangle is
+/// clipped to `cell` once and the polygon split in one pass: kd-tree builders call this for every
+/// primitive straddling a split plane.
+pub fn split_triangle_bounds(
+    v: [Vec3; 3],
+    cell: &Aabb,
+    axis: usize,
+    pos: f32,
+) -> (Option<Aabb>, Option<Aabb>) {
+    let mut lcell = *cell;
+    lcell.max[axis] = pos;
+    let mut rcell = *cell;
+    rcell.min[axis] = pos;
+    let mut poly = Polygon::default();
+    match clip_to_cell(v, cell, &mut poly) {
+        None => return (None, None),
+        Some(Clipped::Whole(_)) => poly.set_triangle(v),
+        Some(Clipped::Polygon) => {}
+    }
+    let c = f64::from(pos);
+    let mut lo = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    let mut hi = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    let grow = |b: &mut (DVec3, DVec3), p: DVec3| {
+        b.0 = b.0.min(p);
+        b.1 = b.1.max(p);
+    };
+    let pts = &poly.points[..poly.len];
+    for (i, a) in pts.iter().enumerate() {
+        let b = &pts[(i + 1) % pts.len()];
+        if a[axis] <= c {
+            grow(&mut lo, *a);
+        }
+        if a[axis] >= c {
+            grow(&mut hi, *a);
+        }
+        if (a[axis] < c && b[axis] > c) || (a[axis] > c && b[axis] < c) {
+            let s = (c - a[axis]) / (b[axis] - a[axis]);
+            let mut p = *a + (*b - *a) * s;
+            p[axis] = c;
+            grow(&mut lo, p);
+            grow(&mut hi, p);
+        }
+    }
+    let finish =
+        |b: (DVec3, DVec3), half: &Aabb| (b.0.x <= b.1.x).then(|| rounded_bounds(b.0, b.1, half));
+    (finish(lo, &lcell), finish(hi, &rcell))
+}
+
+/// A convex polygon of up to nine vertices: a triangle clipped by at most six planes.
+#[derive(Default)]
+struct Polygon {
+    points: [DVec3; 9],
+    len: usize,
+}
+
+impl Polygon {
+    fn set_triangle(&mut self, v: [Vec3; 3]) {
+        for (slot, p) in self.points.iter_mut().zip(v) {
+            *slot = p.as_dvec3();
+        }
+        self.len = 3;
+    }
+
+    fn bounds(&self, cell: &Aabb) -> Aabb {
+        let mut min = DVec3::INFINITY;
+        let mut max = DVec3::NEG_INFINITY;
+        for p in &self.points[..self.len] {
+            min = min.min(*p);
+            max = max.max(*p);
+        }
+        rounded_bounds(min, max, cell)
+    }
+}
+
+/// An `f64` box rounded outwards to `f32` and cut to `cell`.
+fn rounded_bounds(min: DVec3, max: DVec3, cell: &Aabb) -> Aabb {
+    let min = Vec3::from_array(min.to_array().map(round_down)).max(cell.min);
+    let max = Vec3::from_array(max.to_array().map(round_up)).min(cell.max);
+    Aabb::new(min, max)
+}
+
+enum Clipped {
+    /// The triangle lies in the cell; here are its bounds.
+    Whole(Aabb),
+    /// The clipped polygon was written to the output.
+    Polygon,
+}
+
+/// Clips triangle `v` to `cell`, or `None` if they do not meet.
+fn clip_to_cell(v: [Vec3; 3], cell: &Aabb, poly: &mut Polygon) -> Option<Clipped> {
+    if cell.is_empty() || !v.iter().all(|p| p.is_finite()) {
+        return None;
+    }
+    let tri_box = Aabb::from_points(&v);
+    // Fast path: a triangle inside the cell is its own clip.
+    if cell.contains(&tri_box) {
+        return Some(Clipped::Whole(tri_box));
+    }
+    if !tri_box.overlaps(cell) {
+        return None;
+    }
+    poly.set_triangle(v);
+    let mut scratch = [DVec3::ZERO; 9];
+    let lo = cell.min.as_dvec3();
+    let hi = cell.max.as_dvec3();
+    for axis in 0..3 {
+        // Only clip against planes the triangle actually crosses.
+        if tri_box.min[axis] < cell.min[axis] {
+            poly.len = clip_plane(&poly.points[..poly.len], &mut scratch, axis, lo[axis], true);
+            poly.points[..poly.len].copy_from_slice(&scratch[..poly.len]);
+        }
+        if poly.len > 0 && tri_box.max[axis] > cell.max[axis] {
+            poly.len = clip_plane(
+                &poly.points[..poly.len],
+                &mut scratch,
+                axis,
+                hi[axis],
+                false,
+            );
+            poly.points[..poly.len].copy_from_slice(&scratch[..poly.len]);
+        }
+        if poly.len == 0 {
+            return None;
+        }
+    }
+    Some(Clipped::Polygon)
+}
+
+/// Keeps the part of the convex polygon `input` on the inner side of the plane `x[axis] = c`
+/// (`x >= c` when `keep_above`, else `x <= c`), writing it to `out` and returning its length.
+fn clip_plane(
+    input: &[DVec3],
+    out: &mut [DVec3; 9],
+    axis: usize,
+    c: f64,
+    keep_above: bool,
+) -> usize {
+    let inside = |p: &DVec3| {
+        if keep_above {
+            p[axis] >= c
+        } else {
+            p[axis] <= c
+        }
+    };
+    let mut n = 0;
+    for (i, a) in input.iter().enumerate() {
+        let b = &input[(i + 1) % input.len()];
+        let (ia, ib) = (inside(a), inside(b));
+        if ia {
+            out[n] = *a;
+            n += 1;
+        }
+        if ia != ib {
+            // The edge crosses the plane strictly: a and b lie on opposite sides, so the
+            // denominator is non-zero. The crossing is placed exactly on the plane.
+            let s = (c - a[axis]) / (b[axis] - a[axis]);
+            let mut p = *a + (*b - *a) * s;
+            p[axis] = c;
+            out[n] = p;
+            n += 1;
+        }
+    }
+    n
+}
+
+/// The largest `f32` not above `x`.
+fn round_down(x: f64) -> f32 {
+    let f = x as f32;
+    if f as f64 > x { f.next_down() } else { f }
+}
+
+/// The smallest `f32` not below `x`.
+fn round_up(x: f64) -> f32 {
+    let f = x as f32;
+    if (f as f64) < x { f.next_up() } else { f }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Rng;
+    use proptest::prelude::*;
+
+    fn unit() -> Aabb {
+        Aabb::new(Vec3::ZERO, Vec3::ONE)
+    }
+
+    #[test]
+    fn inside_outside_and_touching() {
+        let inside = [
+            Vec3::splat(0.2),
+            Vec3::new(0.8, 0.2, 0.5),
+            Vec3::new(0.5, 0.9, 0.5),
+        ];
+        assert_eq!(
+            clip_triangle_bounds(inside, &unit()),
+            Some(Aabb::from_points(&inside))
+        );
+        let outside = inside.map(|p| p + Vec3::X * 2.0);
+        assert_eq!(clip_triangle_bounds(outside, &unit()), None);
+        // Touching the face x = 1 along an edge: a flat box on that face.
+        let touching = [
+            Vec3::new(1.0, 0.2, 0.2),
+            Vec3::new(1.0, 0.8, 0.2),
+            Vec3::new(2.0, 0.5, 0.8),
+        ];
+        let b = clip_triangle_bounds(touching, &unit()).unwrap();
+        assert_eq!((b.min.x, b.max.x), (1.0, 1.0));
+        assert_eq!((b.min.y, b.max.y), (0.2, 0.8));
+    }
+
+    #[test]
+    fn diagonal_triangle_whose_box_overlaps_but_which_misses_the_cell() {
+        // The triangle's box covers the cell's corner region, but the triangle passes beyond the
+        // corner (1, 1) of the unit cell in xy: x + y >= 2.5 everywhere on it.
+        let tri = [
+            Vec3::new(3.0, -0.5, 0.5),
+            Vec3::new(-0.5, 3.0, 0.5),
+            Vec3::new(3.0, 3.0, 0.5),
+        ];
+        assert_eq!(clip_triangle_bounds(tri, &unit()), None);
+    }
+
+    #[test]
+    fn large_triangle_is_cut_to_the_cell() {
+        let tri = [
+            Vec3::new(-10.0, -10.0, 0.5),
+            Vec3::new(10.0, -10.0, 0.5),
+            Vec3::new(0.0, 10.0, 0.5),
+        ];
+        let b = clip_triangle_bounds(tri, &unit()).unwrap();
+        assert_eq!(
+            b,
+            Aabb::new(Vec3::new(0.0, 0.0, 0.5), Vec3::new(1.0, 1.0, 0.5))
+        );
+    }
+
+    #[test]
+    fn non_finite_input_is_none() {
+        let tri = [Vec3::ZERO, Vec3::splat(f32::NAN), Vec3::ONE];
+        assert_eq!(clip_triangle_bounds(tri, &unit()), None);
+        assert_eq!(
+            clip_triangle_bounds([Vec3::ZERO, Vec3::X, Vec3::Y], &Aabb::EMPTY),
+            None
+        );
+    }
+
+    /// A random triangle and a random cell, both in [-2, 2]³.
+    fn random_case(seed: u64) -> ([Vec3; 3], Aabb) {
+        let mut rng = Rng::new(seed);
+        let (lo, hi) = (Vec3::splat(-2.0), Vec3::splat(2.0));
+        let v = [rng.in_box(lo, hi), rng.in_box(lo, hi), rng.in_box(lo, hi)];
+        let (a, b) = (rng.in_box(lo, hi), rng.in_box(lo, hi));
+        (v, Aabb::new(a.min(b), a.max(b)))
+    }
+
+    proptest! {
+        /// Points sampled on the triangle that lie in the cell are inside the clipped box, and
+        /// the clipped box lies inside both the cell and the triangle's own box.
+        #[test]
+        fn clipped_box_is_conservative_and_tight_enough(seed in any::<u64>()) {
+            let (v, cell) = random_case(seed);
+            let mut rng = Rng::new(seed ^ 0x5eed);
+            let clipped = clip_triangle_bounds(v, &cell);
+            if let Some(c) = clipped {
+                prop_assert!(cell.contains(&c));
+                prop_assert!(Aabb::from_points(&v).contains(&c));
+            }
+            for _ in 0..200 {
+                let (mut s, mut t) = (rng.f32(), rng.f32());
+                if s + t > 1.0 {
+                    (s, t) = (1.0 - s, 1.0 - t);
+                }
+                let p = v[0] + (v[1] - v[0]) * s + (v[2] - v[0]) * t;
+                // Only points well inside the cell count: rounding of p itself is not the
+                // clipper's business.
+                let shrunk = Aabb::new(cell.min + 1e-4, cell.max - 1e-4);
+                if shrunk.contains_point(p) {
+                    let c = clipped.expect("a point of the triangle is in the cell");
+                    prop_assert!(Aabb::new(c.min - 1e-5, c.max + 1e-5).contains_point(p));
+                }
+            }
+        }
+
+        /// Splitting agrees with clipping each half separately, up to rounding.
+        #[test]
+        fn split_equals_two_clips(seed in any::<u64>(), axis in 0usize..3, f in 0.0f32..=1.0) {
+            let (v, cell) = random_case(seed);
+            let pos = cell.min[axis] + f * (cell.max[axis] - cell.min[axis]);
+            let mut l = cell;
+            l.max[axis] = pos;
+            let mut r = cell;
+            r.min[axis] = pos;
+            let (sl, sr) = split_triangle_bounds(v, &cell, axis, pos);
+            for (split, half) in [(sl, l), (sr, r)] {
+                let clipped = clip_triangle_bounds(v, &half);
+                match (split, clipped) {
+                    (Some(a), Some(b)) => {
+                        prop_assert!(half.contains(&a));
+                        prop_assert!((a.min - b.min).abs().max_element() <= 1e-5);
+                        prop_assert!((a.max - b.max).abs().max_element() <= 1e-5);
+                    }
+                    // The two may differ only on a triangle that touches the half in a point
+                    // or an edge, where rounding decides.
+                    (Some(a), None) | (None, Some(a)) => {
+                        prop_assert!(a.extent().min_element() <= 1e-5, "{a:?}");
+                    }
+                    (None, None) => {}
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,590 @@
+//! The O(N log N) SAH build of Wald & Havran (2006), with perfect splits and planar handling.
+//!
+//! Every primitive contributes, per axis, a start and an end event at the bounds of its part in
+//! the node's cell (or one planar event if that part is flat in the axis). The three event lists
+//! are sorted once at the root. A node sweeps each sorted list to find the plane of least SAH
+//! cost, then splits the lists in O(n) by filtering: primitives entirely on one side keep their
+//! events, already in order; only primitives straddling the plane are clipped to the two child
+//! cells and get new events, which are sorted (there are few, O(√n) for typical meshes) and
+//! merged in. So no node sorts its whole list again.
+
+use crate::KdParams;
+use crate::node::{MAX_INDEX, Node};
+use rt_core::{Aabb, Primitive};
+use std::cell::RefCell;
+
+/// Nodes with at least this many references build their two subtrees in parallel.
+///
+/// Smaller subtrees are built on the current thread: a node of a few thousand references is tens
+/// of microseconds of work, the same order as handing a task to another thread.
+const PARALLEL_MIN_REFS: usize = 4096;
+
+/// Event kinds, in their sort order at equal position: ends before planars before starts (Wald &
+/// Havran §4.2), so a sweep sees a primitive leave before the ones that enter at the same plane.
+const END: u32 = 0;
+const PLANAR: u32 = 1;
+const START: u32 = 2;
+
+/// The most primitives a tree can index: event tags keep the kind in their top two bits.
+pub(crate) const MAX_PRIMS: usize = (1 << 30) - 1;
+
+/// One split candidate: a position on the list's axis and `kind << 30 | primitive index`.
+///
+/// Sorting by [`Event::key`] orders by position, then kind, then primitive. That order is total,
+/// so the sorted lists (and so the tree) do not depend on the sort algorithm or on threading.
+#[derive(Clone, Copy, Debug)]
+struct Event {
+    pos: f32,
+    tag: u32,
+}
+
+impl Event {
+    const ZERO: Self = Self { pos: 0.0, tag: 0 };
+
+    #[inline]
+    fn new(pos: f32, kind: u32, prim: u32) -> Self {
+        // `+ 0.0` turns -0.0 into +0.0, so that equal positions also have equal keys.
+        Self {
+            pos: pos + 0.0,
+            tag: (kind << 30) | prim,
+        }
+    }
+
+    #[inline(always)]
+    fn kind(self) -> u32 {
+        self.tag >> 30
+    }
+
+    #[inline(always)]
+    fn prim(self) -> usize {
+        (self.tag & MAX_PRIMS as u32) as usize
+    }
+
+    /// The sort key: the position's bits made monotonic as an integer, then the tag.
+    ///
+    /// One integer comparison instead of `total_cmp` plus a tie-break: the builder sorts and
+    /// merges by it at every node (sorting the straddlers' new events was 6% of a bunny build
+    /// in a `perf` profile).
+    #[inline(always)]
+    fn key(self) -> u64 {
+        let bits = self.pos.to_bits();
+        let ordered = if bits >> 31 == 1 {
+            !bits
+        } else {
+            bits | 1 << 31
+        };
+        (u64::from(ordered) << 32) | u64::from(self.tag)
+    }
+}
+
+/// Appends the events of primitive `prim`, whose part in the cell is `b`.
+fn push_events(lists: &mut [Vec<Event>; 3], prim: u32, b: &Aabb) {
+    for (axis, list) in lists.iter_mut().enumerate() {
+        if b.min[axis] == b.max[axis] {
+            list.push(Event::new(b.min[axis], PLANAR, prim));
+        } else {
+            list.push(Event::new(b.min[axis], START, prim));
+            list.push(Event::new(b.max[axis], END, prim));
+        }
+    }
+}
+
+/// A node waiting to be built: its cell and the sorted events of the primitives overlapping it.
+struct Task {
+    /// The x, y and z event lists, one after the other (one allocation instead of three).
+    events: Vec<Event>,
+    /// Where the y and z lists start in `events`.
+    starts: [usize; 2],
+    /// How many primitives overlap the cell.
+    count: usize,
+    cell: Aabb,
+    depth: u32,
+    /// Splits on the path from the root that did not lower the SAH cost (pbrt's "bad refines").
+    bad_refines: u32,
+}
+
+impl Task {
+    /// The sorted events of `axis`.
+    #[inline]
+    fn axis_events(&self, axis: usize) -> &[Event] {
+        let bounds = [0, self.starts[0], self.starts[1], self.events.len()];
+        &self.events[bounds[axis]..bounds[axis + 1]]
+    }
+}
+
+/// Per-thread buffers reused from node to node, so that a node allocates only its children's
+/// event lists.
+#[derive(Default)]
+struct Scratch {
+    /// Which side each primitive goes to, indexed by primitive; only the current node's entries
+    /// are meaningful.
+    side: Vec<u8>,
+    lnew: [Vec<Event>; 3],
+    rnew: [Vec<Event>; 3],
+}
+
+thread_local! {
+    /// One scratch per thread: a node's partition runs start to finish on one thread, with no
+    /// rayon call inside, so it never shares the buffer.
+    static SCRATCH: RefCell<Scratch> = RefCell::default();
+}
+
+trait CellExt {
+    fn with_max(self, axis: usize, pos: f32) -> Self;
+    fn with_min(self, axis: usize, pos: f32) -> Self;
+}
+
+impl CellExt for Aabb {
+    #[inline]
+    fn with_max(mut self, axis: usize, pos: f32) -> Self {
+        self.max[axis] = pos;
+        self
+    }
+    #[inline]
+    fn with_min(mut self, axis: usize, pos: f32) -> Self {
+        self.min[axis] = pos;
+        self
+    }
+}
+
+/// The chosen plane.
+#[derive(Clone, Copy, Debug)]
+struct Plane {
+    cost: f32,
+    axis: usize,
+    pos: f32,
+    /// Whether primitives lying in the plane go to the left child.
+    planar_left: bool,
+}
+
+/// What the builder hands to [`KdTree`](crate::KdTree).
+#[derive(Debug, Default)]
+pub(crate) struct Built {
+    pub nodes: Vec<Node>,
+    pub refs: Vec<u32>,
+    pub bounds: Aabb,
+    pub max_depth: usize,
+    pub leaves: usize,
+    pub empty_leaves: usize,
+    pub valid_prims: usize,
+}
+
+struct Ctx<'a, P> {
+    prims: &'a [P],
+    kt: f32,
+    ki: f32,
+    empty_factor: f32,
+    perfect: bool,
+    max_depth: u32,
+    max_bad_refines: u32,
+    leaf_size: usize,
+    parallel: bool,
+}
+
+pub(crate) fn build<P: Primitive>(prims: &[P], params: &KdParams) -> Built {
+    let ids: Vec<u32> = (0..prims.len().min(MAX_PRIMS + 1))
+        .filter(|&i| prims[i].is_valid())
+        .map(|i| i as u32)
+        .collect();
+    assert!(
+        prims.len() <= MAX_PRIMS,
+        "a kd-tree holds at most 2^30 - 1 primitives"
+    );
+    let bounds = ids
+        .iter()
+        .fold(Aabb::EMPTY, |b, &i| b.union(prims[i as usize].bounds()));
+    let mut out = Built {
+        bounds,
+        valid_prims: ids.len(),
+        nodes: vec![Node::leaf(0, 0)],
+        ..Built::default()
+    };
+    if ids.is_empty() {
+        out.leaves = 1;
+        out.empty_leaves = 1;
+        return out;
+    }
+    let ctx = Ctx {
+        prims,
+        kt: params.traversal_cost.max(0.0),
+        ki: params.intersection_cost.max(f32::MIN_POSITIVE),
+        empty_factor: 1.0 - params.empty_bonus.clamp(0.0, 1.0),
+        perfect: params.perfect_splits,
+        max_depth: params.resolved_max_depth(ids.len()),
+        max_bad_refines: params.max_bad_refines,
+        leaf_size: params.leaf_size as usize,
+        parallel: params.parallel,
+    };
+    // The scene box is the union of the primitives' bounds, so every valid primitive meets it and
+    // its part in it is its whole bounds.
+    let mut lists: [Vec<Event>; 3] = Default::default();
+    for &id in &ids {
+        push_events(&mut lists, id, &prims[id as usize].bounds());
+    }
+    if ctx.parallel && ids.len() >= PARALLEL_MIN_REFS {
+        use rayon::slice::ParallelSliceMut;
+        for list in &mut lists {
+            list.par_sort_unstable_by_key(|e| e.key());
+        }
+    } else {
+        for list in &mut lists {
+            list.sort_unstable_by_key(|e| e.key());
+        }
+    }
+    let root = Task {
+        starts: [lists[0].len(), lists[0].len() + lists[1].len()],
+        events: lists.concat(),
+        count: ids.len(),
+        cell: bounds,
+        depth: 0,
+        bad_refines: 0,
+    };
+    build_into(&ctx, root, 0, &mut out);
+    out.nodes.shrink_to_fit();
+    out.refs.shrink_to_fit();
+    out
+}
+
+/// Builds `task` with its root written to `out.nodes[slot]` and its descendants appended.
+///
+/// The layout is: a node's two children side by side, then the left child's descendants, then
+/// the right child's. Parallel subtrees are built into their own buffers and appended in the same
+/// order, so the output does not depend on threading.
+fn build_into<P: Primitive>(ctx: &Ctx<'_, P>, task: Task, slot: usize, out: &mut Built) {
+    out.max_depth = out.max_depth.max(task.depth as usize);
+    let (left, right, axis, pos) = match split(ctx, task) {
+        Ok(children) => children,
+        Err(leaf) => return make_leaf(leaf, slot, out),
+    };
+    let first = out.nodes.len();
+    assert!(first < MAX_INDEX, "a kd-tree holds at most 2^30 nodes");
+    out.nodes[slot] = Node::interior(axis, pos, first);
+    out.nodes.push(Node::leaf(0, 0));
+    out.nodes.push(Node::leaf(0, 0));
+    if ctx.parallel && left.count + right.count >= PARALLEL_MIN_REFS {
+        let (l, r) = rayon::join(|| subtree(ctx, left), || subtree(ctx, right));
+        append(out, first, l);
+        append(out, first + 1, r);
+    } else {
+        build_into(ctx, left, first, out);
+        build_into(ctx, right, first + 1, out);
+    }
+}
+
+fn make_leaf(task: Task, slot: usize, out: &mut Built) {
+    let first = out.refs.len();
+    assert!(
+        first + task.count <= MAX_INDEX + 1,
+        "a kd-tree holds at most 2^30 primitive references"
+    );
+    out.nodes[slot] = Node::leaf(first, task.count);
+    // Each primitive has exactly one start or planar event on every axis; list them in index
+    // order, so the leaf does not depend on event order.
+    out.refs.extend(
+        task.axis_events(0)
+            .iter()
+            .filter(|e| e.kind() != END)
+            .map(|e| e.prim() as u32),
+    );
+    out.refs[first..].sort_unstable();
+    out.leaves += 1;
+    out.empty_leaves += usize::from(task.count == 0);
+}
+
+fn subtree<P: Primitive>(ctx: &Ctx<'_, P>, task: Task) -> Built {
+    let mut out = Built {
+        nodes: vec![Node::leaf(0, 0)],
+        ..Built::default()
+    };
+    build_into(ctx, task, 0, &mut out);
+    out
+}
+
+/// Appends a separately built subtree, its root going to `out.nodes[slot]`.
+fn append(out: &mut Built, slot: usize, sub: Built) {
+    // Local node j >= 1 lands at base + j - 1.
+    let node_shift = out.nodes.len() - 1;
+    let ref_shift = out.refs.len();
+    assert!(
+        node_shift + sub.nodes.len() <= MAX_INDEX && ref_shift + sub.refs.len() <= MAX_INDEX + 1,
+        "a kd-tree holds at most 2^30 nodes and 2^30 references"
+    );
+    out.nodes[slot] = sub.nodes[0].relocated(node_shift, ref_shift);
+    out.nodes.extend(
+        sub.nodes[1..]
+            .iter()
+            .map(|n| n.relocated(node_shift, ref_shift)),
+    );
+    out.refs.extend_from_slice(&sub.refs);
+    out.max_depth = out.max_depth.max(sub.max_depth);
+    out.leaves += sub.leaves;
+    out.empty_leaves += sub.empty_leaves;
+}
+
+/// Splits `task` into its two children, or gives it back when it should be a leaf.
+fn split<P: Primitive>(ctx: &Ctx<'_, P>, task: Task) -> Result<(Task, Task, usize, f32), Task> {
+    let n = task.count;
+    if n == 0 || n <= ctx.leaf_size || task.depth >= ctx.max_depth {
+        return Err(task);
+    }
+    let Some(plane) = best_plane(ctx, &task) else {
+        return Err(task);
+    };
+    // Termination (Wald & Havran: stop when no split beats the leaf; pbrt-v4 tolerates a few
+    // non-improving splits on a path, since a later split may still pay off).
+    let leaf_cost = ctx.ki * n as f32;
+    let mut bad_refines = task.bad_refines;
+    if plane.cost >= leaf_cost {
+        bad_refines += 1;
+        if bad_refines > ctx.max_bad_refines || (plane.cost > 4.0 * leaf_cost && n < 16) {
+            return Err(task);
+        }
+    }
+    let (left, right) = SCRATCH.with_borrow_mut(|s| partition(ctx, &task, plane, bad_refines, s));
+    Ok((left, right, plane.axis, plane.pos))
+}
+
+/// The sweep (Wald & Havran, Algorithm 4): per axis, walk the sorted events keeping the counts of
+/// primitives left of, in and right of the current plane, and price every plane strictly inside
+/// the cell.
+fn best_plane<P>(ctx: &Ctx<'_, P>, task: &Task) -> Option<Plane> {
+    let cell = &task.cell;
+    let ext = cell.extent();
+    let half_area = ext.x * ext.y + ext.y * ext.z + ext.z * ext.x;
+    // Also false for NaN, which cannot occur with finite primitives.
+    if half_area.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {
+        return None;
+    }
+    let inv_area = 1.0 / half_area;
+    let n = task.count;
+    let mut best: Option<Plane> = None;
+    let mut best_cost = f32::INFINITY;
+    for axis in 0..3 {
+        let events = task.axis_events(axis);
+        let (lo, hi) = (cell.min[axis], cell.max[axis]);
+        if lo >= hi {
+            continue;
+        }
+        // Half area of a child as a function of its extent `w` along `axis`: w·(e1 + e2) + e1·e2.
+        let (e1, e2) = (ext[(axis + 1) % 3], ext[(axis + 2) % 3]);
+        let (side, cap) = (e1 + e2, e1 * e2);
+        // Per event: `nr` drops at an end or planar event; planars and starts of the current
+        // position wait in `np` and `ns` until its last event, where the plane is priced with
+        // left = nl, in-plane = np, right = nr, and they then move to the left.
+        let (mut nl, mut nr, mut np, mut ns) = (0usize, n, 0usize, 0usize);
+        for (i, e) in events.iter().enumerate() {
+            let kind = e.kind();
+            nr -= usize::from(kind != START);
+            np += usize::from(kind == PLANAR);
+            ns += usize::from(kind == START);
+            if events.get(i + 1).is_some_and(|next| next.pos == e.pos) {
+                continue;
+            }
+            if lo < e.pos && e.pos < hi {
+                let pl = ((e.pos - lo) * side + cap) * inv_area;
+                let pr = ((hi - e.pos) * side + cap) * inv_area;
+                let (cost, planar_left) = sah(ctx, pl, pr, nl, nr, np);
+                if cost < best_cost {
+                    best_cost = cost;
+                    best = Some(Plane {
+                        cost,
+                        axis,
+                        pos: e.pos,
+                        planar_left,
+                    });
+                }
+            }
+            nl += np + ns;
+            np = 0;
+            ns = 0;
+        }
+    }
+    best
+}
+
+/// The SAH cost of a split with `np` primitives in the plane, and the side they should go to.
+///
+/// Written with selects rather than branches, since it runs for every event.
+#[inline(always)]
+fn sah<P>(ctx: &Ctx<'_, P>, pl: f32, pr: f32, nl: usize, nr: usize, np: usize) -> (f32, bool) {
+    let factor = |l: usize, r: usize| {
+        if l == 0 || r == 0 {
+            ctx.empty_factor
+        } else {
+            1.0
+        }
+    };
+    let base = ctx.kt + ctx.ki * (pl * nl as f32 + pr * nr as f32);
+    let npf = np as f32;
+    let cl = factor(nl + np, nr) * (base + ctx.ki * pl * npf);
+    let cr = factor(nl, nr + np) * (base + ctx.ki * pr * npf);
+    let left = cl < cr;
+    (if left { cl } else { cr }, left)
+}
+
+const LEFT: u8 = 1;
+const RIGHT: u8 = 2;
+const BOTH: u8 = 3;
+
+/// Splits the task's events at `plane` (Wald & Havran, Algorithms 5 and 6).
+fn partition<P: Primitive>(
+    ctx: &Ctx<'_, P>,
+    task: &Task,
+    plane: Plane,
+    bad_refines: u32,
+    scratch: &mut Scratch,
+) -> (Task, Task) {
+    let Plane {
+        axis,
+        pos,
+        planar_left,
+        ..
+    } = plane;
+    let Scratch { side, lnew, rnew } = scratch;
+    if side.len() < ctx.prims.len() {
+        side.resize(ctx.prims.len(), BOTH);
+    }
+    // Classify from the split axis' events alone, in one pass: a primitive ending at or before
+    // the plane is left only, one starting at or after it right only, one in it goes where the
+    // SAH said, the rest straddle. A start event comes before its primitive's end event.
+    let split_events = task.axis_events(axis);
+    for e in split_events {
+        let s = &mut side[e.prim()];
+        let kind = e.kind();
+        let at_start = if e.pos >= pos { RIGHT } else { BOTH };
+        let at_end = if e.pos <= pos { LEFT } else { *s };
+        let planar = if e.pos < pos || (e.pos == pos && planar_left) {
+            LEFT
+        } else {
+            RIGHT
+        };
+        *s = if kind == START {
+            at_start
+        } else if kind == END {
+            at_end
+        } else {
+            planar
+        };
+    }
+    // Count the one-sided primitives and clip the straddlers (each has a start event on the
+    // split axis, since a planar one is never on both sides).
+    lnew.iter_mut().chain(rnew.iter_mut()).for_each(Vec::clear);
+    let (mut lcount, mut rcount) = (0, 0);
+    for e in split_events {
+        if e.kind() == END {
+            continue;
+        }
+        match side[e.prim()] {
+            LEFT => lcount += 1,
+            RIGHT => rcount += 1,
+            _ => {
+                let prim = e.prim();
+                let (lb, rb) = clip_both(ctx, &ctx.prims[prim], &task.cell, axis, pos);
+                if let Some(b) = lb {
+                    push_events(lnew, prim as u32, &b);
+                    lcount += 1;
+                }
+                if let Some(b) = rb {
+                    push_events(rnew, prim as u32, &b);
+                    rcount += 1;
+                }
+            }
+        }
+    }
+    // Each child has at most two events per primitive and axis (plus one slot for the
+    // branch-free filter's last speculative write).
+    let mut levents = vec![Event::ZERO; 6 * lcount + 1];
+    let mut revents = vec![Event::ZERO; 6 * rcount + 1];
+    let (mut li, mut ri) = (0, 0);
+    let mut lstarts = [0; 2];
+    let mut rstarts = [0; 2];
+    for a in 0..3 {
+        if a > 0 {
+            lstarts[a - 1] = li;
+            rstarts[a - 1] = ri;
+        }
+        // Every event is written to both lists and only the index of its side advances, instead
+        // of branching on a side that is left or right at random. The straddlers' new events, sorted,
+        // are merged in on the way: before each parent event, those with smaller keys go first.
+        let (ln, rn) = (&mut lnew[a], &mut rnew[a]);
+        ln.sort_unstable_by_key(|e| e.key());
+        rn.sort_unstable_by_key(|e| e.key());
+        let key_at = |list: &[Event], i: usize| list.get(i).map_or(u64::MAX, |e| e.key());
+        let (mut lj, mut rj) = (0, 0);
+        let (mut lnext, mut rnext) = (key_at(ln, 0), key_at(rn, 0));
+        for &e in task.axis_events(a) {
+            let key = e.key();
+            while lnext < key {
+                levents[li] = ln[lj];
+                (li, lj) = (li + 1, lj + 1);
+                lnext = key_at(ln, lj);
+            }
+            while rnext < key {
+                revents[ri] = rn[rj];
+                (ri, rj) = (ri + 1, rj + 1);
+                rnext = key_at(rn, rj);
+            }
+            let s = side[e.prim()];
+            levents[li] = e;
+            li += usize::from(s == LEFT);
+            revents[ri] = e;
+            ri += usize::from(s == RIGHT);
+        }
+        for &e in &ln[lj..] {
+            levents[li] = e;
+            li += 1;
+        }
+        for &e in &rn[rj..] {
+            revents[ri] = e;
+            ri += 1;
+        }
+    }
+    levents.truncate(li);
+    revents.truncate(ri);
+    let depth = task.depth + 1;
+    (
+        Task {
+            events: levents,
+            starts: lstarts,
+            count: lcount,
+            cell: task.cell.with_max(axis, pos),
+            depth,
+            bad_refines,
+        },
+        Task {
+            events: revents,
+            starts: rstarts,
+            count: rcount,
+            cell: task.cell.with_min(axis, pos),
+            depth,
+            bad_refines,
+        },
+    )
+}
+
+/// The parts of a straddling primitive in the two child cells: clipped exactly with perfect
+/// splits, else its bounds cut to each cell.
+fn clip_both<P: Primitive>(
+    ctx: &Ctx<'_, P>,
+    prim: &P,
+    cell: &Aabb,
+    axis: usize,
+    pos: f32,
+) -> (Option<Aabb>, Option<Aabb>) {
+    let loose = || {
+        let b = prim.bounds().intersection(cell);
+        let (mut l, mut r) = (b, b);
+        l.max[axis] = l.max[axis].min(pos);
+        r.min[axis] = r.min[axis].max(pos);
+        ((!l.is_empty()).then_some(l), (!r.is_empty()).then_some(r))
+    };
+    if !ctx.perfect {
+        return loose();
+    }
+    match prim.split_bounds(cell, axis, pos) {
+        // The primitive was in the parent cell, so in exact arithmetic it meets a child; if
+        // rounding lost it on both sides, keep the loose parts rather than drop it.
+        (None, None) => loose(),
+        parts => parts,
+    }
+}

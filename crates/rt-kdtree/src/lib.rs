@@ -1,0 +1,297 @@
+//! A cost-optimized kd-tree for CPU ray tracing, built by the surface area heuristic.
+//!
+//! # The structure
+//! A binary space partition by axis-aligned planes. Each interior node cuts its cell in two at
+//! one plane; each leaf cell lists the primitives that overlap it. Unlike a BVH, cells never
+//! overlap, so a ray visits the leaves it crosses in order of distance and can stop at the first
+//! one that yields a hit inside it. The price is that a primitive crossing a plane is referenced
+//! from both sides (the duplication factor), and that traversal needs the in-cell rule below.
+//!
+//! A good tree is long and thin: deep (tens of levels), leaves of one to three primitives, and
+//! large empty cells cut off early so that rays cross empty space in a few steps. The surface area
+//! heuristic produces this shape when it is evaluated on every candidate plane, which the builder
+//! does in O(N log N) (Wald & Havran 2006).
+//!
+//! # Build
+//! - **Cost model** (Wald & Havran 2006; pbrt-v4 §7.4 for the kd-tree of pbrt-v3): a split of a
+//!   cell `V` into `V_L`, `V_R` with `N_L`, `N_R` primitives costs
+//!   `λ · (K_T + K_I · (P_L · N_L + P_R · N_R))`, with `P = SA(child) / SA(V)` and `λ =
+//!   1 - empty_bonus` when one side is empty; a leaf costs `K_I · N`. A node becomes a leaf when
+//!   no plane beats the leaf cost (or after `max_bad_refines` such planes on one path), when it
+//!   holds at most `leaf_size` primitives, or at the depth limit `8 + 1.3 · log2 N`.
+//! - **O(N log N) build**: the split candidates (the bounds of each primitive's part in the cell,
+//!   per axis) are sorted once, and each node splits the sorted lists in linear time; only the
+//!   primitives straddling the plane get new candidates, which are sorted and merged in.
+//! - **Planar primitives** (a triangle lying in a candidate plane, or whose part in the cell is
+//!   flat) are counted on neither side while the plane is priced, then put on the cheaper side.
+//! - **Perfect splits** (`perfect_splits`): a straddling triangle is clipped to each child cell
+//!   ([`rt_core::clip_triangle_bounds`]), so its candidates are the bounds of the part inside
+//!   and a triangle that merely has its bounding box in a cell is not referenced there.
+//! - **Parallel**: the two subtrees of a large node are built with `rayon::join`, each into its
+//!   own buffer, appended in a fixed order: the tree is the same as the sequential build's.
+//!
+//! # Memory
+//! 8 bytes per [`Node`] (split position, then axis or leaf flag in two bits and a 30-bit index;
+//! children are stored side by side, so one index finds both; no bounding box), 4 bytes per
+//! primitive reference, plus the primitives themselves.
+//!
+//! # Traversal
+//! Front to back (Hapala & Havran's listing in the lecture). A step at an interior node costs
+//! one subtraction and one multiplication (the distance to the plane) and picks the near child
+//! from the origin's side; a leaf tests its primitives. A hit counts as final only if its
+//! distance lies inside the current leaf's interval `[t_entry, t_exit]`, since a primitive
+//! spanning several cells may be hit behind a closer primitive in the next leaf. Two traversals
+//! ([`Traversal`]):
+//! - `Stack`: far children go on a fixed stack of [`MAX_DEPTH`] entries, no allocation.
+//! - `Restart`: stackless kd-restart with push-down (Foley & Sugerman 2005; Horn et al. 2007).
+//!   After a leaf it descends again from the top with the interval starting at the leaf's exit.
+//!
+//! Any-hit queries return at the first hit in the ray's interval.
+//!
+//! # Tuning knobs ([`KdParams`])
+//! | knob | `sah` (Wald & Havran 2006) | `pbrt` (pbrt-v3 `KdTreeAccel`) |
+//! | --- | --- | --- |
+//! | `traversal_cost` K_T | 15 | 1 |
+//! | `intersection_cost` K_I | 20 | 80 |
+//! | `empty_bonus` (1 − λ) | 0.2 (λ = 0.8) | 0.5 |
+//! | `max_bad_refines` | 0 | 2 (a third makes a leaf) |
+//! | `leaf_size` | 0 (the cost decides) | 1 |
+//! | `perfect_splits` | yes | no (bounds cut to the cell) |
+//!
+//! Presets `noclip` (the `sah` costs without perfect splits) and `restart` (the `sah` tree with
+//! the stackless traversal) isolate what each feature buys in `cargo xtask compare`.
+//!
+//! # Example
+//! ```
+//! use rt_kdtree::{KdParams, KdTree};
+//! use rt_core::{Accel, Ray, Triangle, glam::Vec3};
+//!
+//! let tris = vec![
+//!     Triangle::new(Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)),
+//!     Triangle::new(Vec3::new(-1.0, -1.0, 3.0), Vec3::new(1.0, -1.0, 3.0), Vec3::new(0.0, 1.0, 3.0)),
+//! ];
+//! let tree = KdTree::build(&tris, &KdParams::sah());
+//! let hit = tree.intersect(&Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z)).unwrap();
+//! assert_eq!((hit.prim, hit.t), (1, 2.0));
+//! assert!(tree.occluded(&Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z)));
+//! assert!(tree.validate().is_ok());
+//! ```
+#![warn(missing_docs)]
+
+mod builder;
+mod node;
+mod traverse;
+mod validate;
+
+pub use node::Node;
+pub use validate::ValidationError;
+
+use rt_core::{Aabb, Accel, BuildStats, Hit, Primitive, Ray, Stats};
+
+/// The deepest a tree may be (the size of the fixed traversal stack); `max_depth` is clamped to it.
+pub const MAX_DEPTH: usize = 64;
+
+/// Which traversal a tree uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Traversal {
+    /// Front to back with a fixed-size stack of far children.
+    #[default]
+    Stack,
+    /// Stackless kd-restart with push-down.
+    Restart,
+}
+
+/// Build and traversal parameters. `Default` is [`KdParams::sah`].
+#[derive(Clone, Debug, PartialEq)]
+pub struct KdParams {
+    /// K_T: the cost of one traversal step, in the same unit as `intersection_cost`.
+    pub traversal_cost: f32,
+    /// K_I: the cost of one primitive test.
+    pub intersection_cost: f32,
+    /// The fraction of the cost waived for a split with an empty side (`1 - λ`), in `0..=1`.
+    pub empty_bonus: f32,
+    /// Clip straddling primitives to the child cells before computing their split candidates.
+    pub perfect_splits: bool,
+    /// Depth limit; `None` is `8 + 1.3 · log2 N` (pbrt). Clamped to [`MAX_DEPTH`].
+    pub max_depth: Option<u32>,
+    /// How many splits that do not lower the cost a path may take before a node becomes a leaf.
+    pub max_bad_refines: u32,
+    /// Nodes with at most this many primitives become leaves without pricing splits.
+    pub leaf_size: u32,
+    /// Build the subtrees of large nodes in parallel (rayon); the tree is the same either way.
+    pub parallel: bool,
+    /// The traversal used by [`Accel::intersect`] and [`Accel::occluded`].
+    pub traversal: Traversal,
+}
+
+impl KdParams {
+    /// Wald & Havran (2006): K_T = 15, K_I = 20, λ = 0.8 for an empty side, perfect splits,
+    /// termination as soon as no split beats the leaf.
+    pub fn sah() -> Self {
+        Self {
+            traversal_cost: 15.0,
+            intersection_cost: 20.0,
+            empty_bonus: 0.2,
+            perfect_splits: true,
+            max_depth: None,
+            max_bad_refines: 0,
+            leaf_size: 0,
+            parallel: true,
+            traversal: Traversal::Stack,
+        }
+    }
+
+    /// pbrt-v3's `KdTreeAccel` defaults: K_I = 80, K_T = 1, empty bonus 0.5, one primitive per
+    /// leaf, up to two bad refines, candidates from bounding boxes (no perfect splits).
+    pub fn pbrt() -> Self {
+        Self {
+            traversal_cost: 1.0,
+            intersection_cost: 80.0,
+            empty_bonus: 0.5,
+            perfect_splits: false,
+            max_bad_refines: 2,
+            leaf_size: 1,
+            ..Self::sah()
+        }
+    }
+
+    /// [`sah`](Self::sah) without perfect splits: candidates from bounding boxes cut to the cell.
+    pub fn noclip() -> Self {
+        Self {
+            perfect_splits: false,
+            ..Self::sah()
+        }
+    }
+
+    /// The [`sah`](Self::sah) tree with the stackless kd-restart traversal.
+    pub fn restart() -> Self {
+        Self {
+            traversal: Traversal::Restart,
+            ..Self::sah()
+        }
+    }
+
+    /// The depth limit for `n` primitives.
+    pub fn resolved_max_depth(&self, n: usize) -> u32 {
+        let auto = (8.0 + 1.3 * (n.max(1) as f64).log2()).round() as u32;
+        self.max_depth.unwrap_or(auto).min(MAX_DEPTH as u32)
+    }
+}
+
+impl Default for KdParams {
+    fn default() -> Self {
+        Self::sah()
+    }
+}
+
+/// A kd-tree over primitives of type `P`. See the [crate documentation](crate).
+#[derive(Clone, Debug)]
+pub struct KdTree<P: Primitive> {
+    nodes: Vec<Node>,
+    refs: Vec<u32>,
+    prims: Vec<P>,
+    bounds: Aabb,
+    traversal: Traversal,
+    max_depth: usize,
+    leaves: usize,
+    empty_leaves: usize,
+    valid_prims: usize,
+}
+
+impl<P: Primitive> KdTree<P> {
+    /// The nodes, root first; an interior node's children are `index()` and `index() + 1`.
+    pub fn nodes(&self) -> &[Node] {
+        &self.nodes
+    }
+
+    /// The primitive references the leaves index into: input indices of the primitives.
+    pub fn references(&self) -> &[u32] {
+        &self.refs
+    }
+
+    /// The scene box: the root cell.
+    pub fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// The traversal this tree uses.
+    pub fn traversal(&self) -> Traversal {
+        self.traversal
+    }
+
+    /// Switches the traversal; the tree is the same for both.
+    pub fn set_traversal(&mut self, traversal: Traversal) {
+        self.traversal = traversal;
+    }
+}
+
+impl<P: Primitive> Accel for KdTree<P> {
+    type Prim = P;
+    type Params = KdParams;
+    const NAME: &'static str = "kdtree";
+
+    fn presets() -> Vec<(&'static str, KdParams)> {
+        vec![
+            ("sah", KdParams::sah()),
+            ("restart", KdParams::restart()),
+            ("noclip", KdParams::noclip()),
+            ("pbrt", KdParams::pbrt()),
+        ]
+    }
+
+    /// Builds the tree; invalid primitives (see [`Primitive::is_valid`]) are left out.
+    ///
+    /// # Panics
+    /// If the tree would need more than 2³⁰ nodes or references, the most an 8-byte node can
+    /// index (far beyond what fits in memory for triangles).
+    fn build(prims: &[P], params: &KdParams) -> Self {
+        let b = builder::build(prims, params);
+        Self {
+            nodes: b.nodes,
+            refs: b.refs,
+            prims: prims.to_vec(),
+            bounds: b.bounds,
+            traversal: params.traversal,
+            max_depth: b.max_depth,
+            leaves: b.leaves,
+            empty_leaves: b.empty_leaves,
+            valid_prims: b.valid_prims,
+        }
+    }
+
+    #[inline]
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        match self.traversal {
+            Traversal::Stack => self.traverse_stack::<S, false>(ray, stats),
+            Traversal::Restart => self.traverse_restart::<S, false>(ray, stats),
+        }
+    }
+
+    #[inline]
+    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+        match self.traversal {
+            Traversal::Stack => self.traverse_stack::<S, true>(ray, stats),
+            Traversal::Restart => self.traverse_restart::<S, true>(ray, stats),
+        }
+        .is_some()
+    }
+
+    fn memory_bytes(&self) -> usize {
+        size_of::<Self>()
+            + self.nodes.capacity() * size_of::<Node>()
+            + self.refs.capacity() * size_of::<u32>()
+            + self.prims.capacity() * size_of::<P>()
+    }
+
+    fn build_stats(&self) -> BuildStats {
+        BuildStats {
+            nodes: self.nodes.len(),
+            leaves: self.leaves,
+            empty_leaves: self.empty_leaves,
+            max_depth: self.max_depth,
+            prim_refs: self.refs.len(),
+            valid_prims: self.valid_prims,
+            extra: Vec::new(),
+        }
+    }
+}

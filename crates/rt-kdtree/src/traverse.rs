@@ -1,0 +1,286 @@
+//! Front-to-back traversal: with a stack (Hapala & Havran's listing), or stackless by restart.
+//!
+//! Both walk the leaves the ray crosses in order of distance, each with its parametric interval
+//! `[t0, t1]`. An interior node costs one subtraction and one multiplication: the distance to its
+//! split plane. The near child is the one on the ray origin's side (for an origin in the plane,
+//! the side the ray comes from), and the far child is visited only if the plane distance lies
+//! inside the interval.
+//!
+//! The closest-hit rule: a primitive may be hit beyond the leaf being tested (it spans several
+//! cells), while a closer primitive waits in the next leaf. Such a hit is kept as the best so
+//! far, but only a hit inside the current interval ends the walk. Equivalently, a leaf is skipped
+//! when it starts beyond the best hit. All interval comparisons allow [`SLAB_FAR_SCALE`] of
+//! rounding, as the BVH does, so a primitive tying with the best hit on a cell boundary is still
+//! found.
+
+use crate::{KdTree, MAX_DEPTH, Node};
+use rt_core::{Hit, Mailbox, Primitive, Ray, SLAB_FAR_SCALE, Stats};
+
+/// Mailbox slots per ray: the last this many primitives tested are not tested again.
+const MAILBOX: usize = 8;
+
+/// Where the ray goes at one interior node.
+enum Step {
+    /// Only the child on the origin's side.
+    Near(usize),
+    /// Only the other child.
+    Far(usize),
+    /// Both: the near one for `[t0, t]`, then the far one for `[t, t1]`.
+    Both { near: usize, far: usize, t: f32 },
+    /// The ray lies in the split plane: both children, each over the whole interval.
+    InPlane { near: usize, far: usize },
+}
+
+/// The ray's components as arrays, so an axis index does not branch.
+#[derive(Clone, Copy)]
+struct RayAxes {
+    o: [f32; 3],
+    d: [f32; 3],
+    inv: [f32; 3],
+}
+
+impl RayAxes {
+    #[inline(always)]
+    fn new(ray: &Ray) -> Self {
+        Self {
+            o: ray.origin.to_array(),
+            d: ray.dir.to_array(),
+            inv: ray.inv_dir.to_array(),
+        }
+    }
+
+    /// The step at interior node `node` for the ray's interval `[t0, t1]`.
+    #[inline(always)]
+    fn step(&self, node: &Node, t0: f32, t1: f32) -> Step {
+        let a = node.axis();
+        let split = node.split();
+        let first = node.index();
+        let t = (split - self.o[a]) * self.inv[a];
+        let below = self.o[a] < split || (self.o[a] == split && self.d[a] > 0.0);
+        let (near, far) = if below {
+            (first, first + 1)
+        } else {
+            (first + 1, first)
+        };
+        if t.is_nan() {
+            // Origin in the plane and direction parallel to it: 0 · ∞.
+            Step::InPlane { near, far }
+        } else if t < 0.0 || t > t1 * SLAB_FAR_SCALE {
+            Step::Near(near)
+        } else if t * SLAB_FAR_SCALE < t0 {
+            Step::Far(far)
+        } else {
+            Step::Both { near, far, t }
+        }
+    }
+}
+
+impl<P: Primitive> KdTree<P> {
+    /// Tests a leaf's primitives against `[ray.t_min, best.t]`. Returns true if `ANY` and one hit.
+    #[inline(always)]
+    fn test_leaf<S: Stats, const ANY: bool>(
+        &self,
+        node: &Node,
+        ray: &Ray,
+        best: &mut Hit,
+        mailbox: &mut Mailbox<MAILBOX>,
+        stats: &mut S,
+    ) -> bool {
+        let first = node.index();
+        for &id in &self.refs[first..first + node.count()] {
+            if mailbox.check_and_insert(id) {
+                stats.mailbox_skip();
+                continue;
+            }
+            stats.prim_test();
+            let prim = &self.prims[id as usize];
+            if ANY {
+                if prim.occludes(ray, best.t) {
+                    best.prim = id;
+                    return true;
+                }
+            } else if let Some(h) = prim.intersect(ray, best.t)
+                && Hit::beats(h.t, id, best.t, best.prim)
+            {
+                *best = Hit {
+                    prim: id,
+                    t: h.t,
+                    u: h.u,
+                    v: h.v,
+                };
+            }
+        }
+        false
+    }
+
+    /// The scene-box interval and the initial "no hit" record, or `None` if the ray misses.
+    #[inline(always)]
+    fn start(&self, ray: &Ray) -> Option<(f32, f32, Hit)> {
+        if self.refs.is_empty() {
+            return None;
+        }
+        let (t0, t1) = self.bounds.intersect(ray, ray.t_max)?;
+        let best = Hit {
+            prim: u32::MAX,
+            t: ray.t_max,
+            u: 0.0,
+            v: 0.0,
+        };
+        Some((t0, t1, best))
+    }
+
+    #[inline(always)]
+    fn finish<const ANY: bool>(best: Hit) -> Option<Hit> {
+        (best.prim != u32::MAX).then_some(if ANY {
+            Hit {
+                t: f32::NAN,
+                ..best
+            }
+        } else {
+            best
+        })
+    }
+
+    /// Stack traversal. `ANY = false` finds the closest hit; `ANY = true` returns at the first.
+    #[inline(always)]
+    pub(crate) fn traverse_stack<S: Stats, const ANY: bool>(
+        &self,
+        ray: &Ray,
+        stats: &mut S,
+    ) -> Option<Hit> {
+        let (t0, t1, mut best) = self.start(ray)?;
+        self.stack_walk::<S, ANY>(ray, t0, t1, &mut best, stats);
+        Self::finish::<ANY>(best)
+    }
+
+    /// The stack walk from the root over `[t0, t1]`, updating `best`. Returns true on an any-hit.
+    ///
+    /// Far children are pushed with their intervals; a popped one is skipped if it starts beyond
+    /// the best hit. The stack holds at most one entry per level, and the builder bounds the depth
+    /// by `MAX_DEPTH`.
+    #[inline(always)]
+    fn stack_walk<S: Stats, const ANY: bool>(
+        &self,
+        ray: &Ray,
+        mut t0: f32,
+        mut t1: f32,
+        best: &mut Hit,
+        stats: &mut S,
+    ) -> bool {
+        let r = RayAxes::new(ray);
+        let nodes = &self.nodes[..];
+        let mut stack = [(0u32, 0.0f32, 0.0f32); MAX_DEPTH];
+        let mut sp = 0;
+        let mut current = 0;
+        let mut mailbox = Mailbox::new();
+        loop {
+            stats.node_visit();
+            let node = &nodes[current];
+            if !node.is_leaf() {
+                current = match r.step(node, t0, t1) {
+                    Step::Near(c) | Step::Far(c) => c,
+                    Step::Both { near, far, t } => {
+                        stack[sp] = (far as u32, t.max(t0), t1);
+                        sp += 1;
+                        t1 = t.min(t1);
+                        near
+                    }
+                    Step::InPlane { near, far } => {
+                        stack[sp] = (far as u32, t0, t1);
+                        sp += 1;
+                        near
+                    }
+                };
+                continue;
+            }
+            if self.test_leaf::<S, ANY>(node, ray, best, &mut mailbox, stats) {
+                return true;
+            }
+            loop {
+                if sp == 0 {
+                    return false;
+                }
+                sp -= 1;
+                let (index, a0, a1) = stack[sp];
+                if a0 <= best.t * SLAB_FAR_SCALE {
+                    (current, t0, t1) = (index as usize, a0, a1);
+                    break;
+                }
+            }
+        }
+    }
+
+    /// Stackless traversal by kd-restart (Foley & Sugerman 2005) with push-down (Horn et al.
+    /// 2007): after a leaf ending at `t1` without a valid hit, descend again from the top with
+    /// the interval starting at `t1`. The descent starts at the deepest node found so far whose
+    /// cell holds the whole rest of the ray (push-down), not always at the root.
+    ///
+    /// At a restart the exit plane of the previous leaf lies exactly at `t0`, and the walk goes to
+    /// its far side. Restart cannot visit a leaf the ray only touches at one point (where it
+    /// passes through an edge or corner of cells): when a descent meets a plane within rounding of
+    /// `t0` (other than that exit plane) or of `t1`, or the ray lies in a split plane, the ray
+    /// finishes with [`stack_walk`](Self::stack_walk), which visits both sides. Such rays need
+    /// coordinates that coincide to within 2⁻¹⁶, so they are rare, and the answer stays exact.
+    #[inline(always)]
+    pub(crate) fn traverse_restart<S: Stats, const ANY: bool>(
+        &self,
+        ray: &Ray,
+        stats: &mut S,
+    ) -> Option<Hit> {
+        let (mut t0, t_end, mut best) = self.start(ray)?;
+        let r = RayAxes::new(ray);
+        let nodes = &self.nodes[..];
+        let mut top = 0;
+        let mut exit_node = usize::MAX;
+        let mut restarted = false;
+        let mut mailbox = Mailbox::new();
+        loop {
+            let mut current = top;
+            let mut t1 = t_end;
+            let mut branched = false;
+            let mut leaf_exit = usize::MAX;
+            loop {
+                stats.node_visit();
+                let node = &nodes[current];
+                if node.is_leaf() {
+                    break;
+                }
+                let next = match r.step(node, t0, t1) {
+                    Step::Near(c) => c,
+                    Step::Far(c) => c,
+                    Step::Both { far, .. } if current == exit_node => far,
+                    // A plane within rounding of either end of the interval means a leaf
+                    // touched at one point: the near one at a restart, or the far one, which the
+                    // next restart would skip.
+                    Step::Both { near, t, .. }
+                        if (!restarted || t > t0 * SLAB_FAR_SCALE) && t * SLAB_FAR_SCALE < t1 =>
+                    {
+                        branched = true;
+                        if t < t1 {
+                            t1 = t;
+                            leaf_exit = current;
+                        }
+                        near
+                    }
+                    Step::Both { .. } | Step::InPlane { .. } => {
+                        self.stack_walk::<S, ANY>(ray, t0, t_end, &mut best, stats);
+                        return Self::finish::<ANY>(best);
+                    }
+                };
+                if !branched {
+                    top = next;
+                }
+                current = next;
+            }
+            if self.test_leaf::<S, ANY>(&nodes[current], ray, &mut best, &mut mailbox, stats)
+                || t1 >= t_end
+                || t1 > best.t * SLAB_FAR_SCALE
+            {
+                return Self::finish::<ANY>(best);
+            }
+            t0 = t1;
+            exit_node = leaf_exit;
+            restarted = true;
+        }
+    }
+}

@@ -1,11 +1,12 @@
-//! Build and primary-ray trace times of rt-bvh against the `obvhs` and `bvh` crates, on the same
-//! triangles and the same rays, single-threaded. Run with `cargo bench -p rt-benches --bench trace`.
+//! Build and primary-ray trace times of rt-bvh and rt-kdtree against the `obvhs` and `bvh`
+//! crates, on the same triangles and the same rays, single-threaded. Run with `cargo bench -p rt-benches --bench trace`.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rt_benches::{BenchScene, scenes};
 use rt_bvh::{Bvh, BvhParams};
 use rt_core::glam::Vec3A;
 use rt_core::{Accel, MtTriangle, Ray, Triangle};
+use rt_kdtree::{KdParams, KdTree};
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -76,6 +77,23 @@ fn bench_build(c: &mut Criterion, scene: &BenchScene) {
             b.iter(|| Bvh::build(black_box(&scene.triangles), &params));
         });
     }
+    // Single-threaded, as the kd-tree issue's build-time bound asks (rt-bvh's build is serial).
+    for (preset, params) in [
+        ("sah", KdParams::sah()),
+        ("noclip", KdParams::noclip()),
+        ("pbrt", KdParams::pbrt()),
+    ] {
+        let params = KdParams {
+            parallel: false,
+            ..params
+        };
+        g.bench_function(BenchmarkId::new("rt-kdtree", preset), |b| {
+            b.iter(|| KdTree::build(black_box(&scene.triangles), &params));
+        });
+    }
+    g.bench_function(BenchmarkId::new("rt-kdtree", "sah-parallel"), |b| {
+        b.iter(|| KdTree::build(black_box(&scene.triangles), &KdParams::sah()));
+    });
     let otris = to_obvhs(&scene.triangles);
     g.bench_function(BenchmarkId::new("obvhs", "medium"), |b| {
         b.iter(|| obvhs_build(black_box(&otris), obvhs::BvhBuildParams::medium_build()));
@@ -105,6 +123,14 @@ fn bench_trace(c: &mut Criterion, scene: &BenchScene) {
     g.bench_function("rt-bvh/watertight", |b| {
         b.iter(|| count_hits(black_box(&bvh), &rays))
     });
+    for (label, params) in [
+        ("rt-kdtree/stack", KdParams::sah()),
+        ("rt-kdtree/restart", KdParams::restart()),
+    ] {
+        let kd = KdTree::build(&scene.triangles, &params);
+        assert_eq!(count_hits(&kd, &rays), expected, "{label}");
+        g.bench_function(label, |b| b.iter(|| count_hits(black_box(&kd), &rays)));
+    }
     let mt: Vec<MtTriangle> = scene.triangles.iter().copied().map(MtTriangle).collect();
     let bvh_mt = Bvh::build(&mt, &BvhParams::sah());
     g.bench_function("rt-bvh/moller-trumbore", |b| {

@@ -111,7 +111,19 @@ fn default_scene_json_has_every_field_and_no_mismatch() {
         .iter()
         .map(|r| r["structure"].as_str().unwrap())
         .collect();
-    assert_eq!(names, ["brute-force", "bvh", "bvh-median", "bvh-middle"]);
+    assert_eq!(
+        names,
+        [
+            "brute-force",
+            "bvh",
+            "bvh-median",
+            "bvh-middle",
+            "kdtree",
+            "kdtree-restart",
+            "kdtree-noclip",
+            "kdtree-pbrt"
+        ]
+    );
     for r in rows {
         for field in [
             "structure",
@@ -124,6 +136,11 @@ fn default_scene_json_has_every_field_and_no_mismatch() {
             "avg_visits",
             "avg_prim_tests",
             "mrays_per_s",
+            "leaves",
+            "empty_leaves",
+            "avg_leaf_prims",
+            "prim_refs",
+            "duplication",
         ] {
             assert!(!r[field].is_null(), "{field} missing in {r}");
         }
@@ -169,48 +186,57 @@ fn rays_file_replays_exactly_and_reports_every_answer() {
     assert!(answers[0][2].is_null());
 }
 
-/// The acceptance runs on the bunny, at a reduced image size so the suite stays quick:
+/// The acceptance runs on the bunny and the teapot, at a reduced image size so the suite stays quick:
 /// no mismatch for primary, incoherent and shadow rays; and, on primary rays, the SAH tree
-/// needs at most 12 primitive tests per ray and fewer than the median split.
+/// needs at most 12 primitive tests per ray and fewer than the median split. The teapot too, and
+/// the kd-tree's shape figures are present.
 #[test]
-fn bunny_all_ray_kinds_agree_and_sah_beats_median() {
+fn meshes_all_ray_kinds_agree_and_sah_beats_median() {
     let Some(dir) = shared_meshes_dir() else {
         return;
     };
-    let bunny = dir.join("stanford-bunny.obj");
-    for kind in ["primary", "incoherent", "shadow"] {
-        let v = json(&compare(&[
-            "--scene",
-            bunny.to_str().unwrap(),
-            "--rays",
-            kind,
-            "--width",
-            "128",
-            "--height",
-            "96",
-            "--check-rays",
-            "1500",
-            "--repeats",
-            "1",
-            "--json",
-        ]));
-        let rows = v["results"].as_array().unwrap();
-        for r in rows {
-            assert_eq!(r["mismatches"], 0, "{kind}: {r}");
-        }
-        if kind == "primary" {
-            let tests = |name: &str| {
-                rows.iter().find(|r| r["structure"] == name).unwrap()["avg_prim_tests"]
-                    .as_f64()
-                    .unwrap()
+    for mesh in ["stanford-bunny.obj", "teapot.obj"] {
+        let path = dir.join(mesh);
+        for kind in ["primary", "incoherent", "shadow"] {
+            let v = json(&compare(&[
+                "--scene",
+                path.to_str().unwrap(),
+                "--rays",
+                kind,
+                "--width",
+                "128",
+                "--height",
+                "96",
+                "--check-rays",
+                "1500",
+                "--repeats",
+                "1",
+                "--json",
+            ]));
+            let rows = v["results"].as_array().unwrap();
+            for r in rows {
+                assert_eq!(r["mismatches"], 0, "{mesh} {kind}: {r}");
+            }
+            let row = |name: &str| {
+                rows.iter()
+                    .find(|r| r["structure"] == name)
+                    .unwrap_or_else(|| panic!("no {name} row"))
             };
-            assert!(tests("bvh") <= 12.0, "SAH: {} tests per ray", tests("bvh"));
-            assert!(
-                tests("bvh") < tests("bvh-median"),
-                "SAH {} vs median {}",
-                tests("bvh"),
-                tests("bvh-median")
-            );
+            let tests = |name: &str| row(name)["avg_prim_tests"].as_f64().unwrap();
+            // The kd-tree's shape is reported: it duplicates references and has empty leaves.
+            let kd = row("kdtree");
+            assert!(kd["duplication"].as_f64().unwrap() > 1.0, "{kd}");
+            assert!(kd["empty_leaves"].as_u64().unwrap() > 0, "{kd}");
+            assert!(kd["empty_leaves"].as_u64() < kd["leaves"].as_u64(), "{kd}");
+            if mesh == "stanford-bunny.obj" && kind == "primary" {
+                assert!(tests("bvh") <= 12.0, "SAH: {} tests per ray", tests("bvh"));
+                assert!(
+                    tests("bvh") < tests("bvh-median"),
+                    "SAH {} vs median {}",
+                    tests("bvh"),
+                    tests("bvh-median")
+                );
+            }
         }
     }
 }

@@ -8,7 +8,7 @@
 //! 2000; Wald & Havran 2006).
 
 use crate::Aabb;
-use glam::{DVec3, Vec3};
+use glam::Vec3;
 
 /// The bounds of the part of triangle `v` that lies in `cell` (closed), or `None` if the two do
 /// not meet.
@@ -51,65 +51,94 @@ pub fn split_triangle_bounds(
         Some(Clipped::Polygon) => {}
     }
     let c = f64::from(pos);
-    let mut lo = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    let mut hi = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    let grow = |b: &mut (DVec3, DVec3), p: DVec3| {
-        b.0 = b.0.min(p);
-        b.1 = b.1.max(p);
-    };
+    let mut lo = Bounds64::EMPTY;
+    let mut hi = Bounds64::EMPTY;
     let pts = &poly.points[..poly.len];
-    for (i, a) in pts.iter().enumerate() {
-        let b = &pts[(i + 1) % pts.len()];
-        if a[axis] <= c {
-            grow(&mut lo, *a);
+    let mut a = pts[pts.len() - 1];
+    for &b in pts {
+        // Edge a -> b; every vertex is visited once as `b`.
+        if b[axis] <= c {
+            lo.grow(b);
         }
-        if a[axis] >= c {
-            grow(&mut hi, *a);
+        if b[axis] >= c {
+            hi.grow(b);
         }
         if (a[axis] < c && b[axis] > c) || (a[axis] > c && b[axis] < c) {
-            let s = (c - a[axis]) / (b[axis] - a[axis]);
-            let mut p = *a + (*b - *a) * s;
-            p[axis] = c;
-            grow(&mut lo, p);
-            grow(&mut hi, p);
+            let p = crossing(a, b, axis, c);
+            lo.grow(p);
+            hi.grow(p);
+        }
+        a = b;
+    }
+    (lo.rounded(&lcell), hi.rounded(&rcell))
+}
+
+type P3 = [f64; 3];
+
+/// The point where segment `a`-`b` crosses the plane `x[axis] = c` (they lie strictly on
+/// opposite sides, so the denominator is non-zero), placed exactly on the plane.
+#[inline]
+fn crossing(a: P3, b: P3, axis: usize, c: f64) -> P3 {
+    let s = (c - a[axis]) / (b[axis] - a[axis]);
+    let mut p: P3 = std::array::from_fn(|k| a[k] + (b[k] - a[k]) * s);
+    p[axis] = c;
+    p
+}
+
+/// An `f64` box, grown point by point.
+#[derive(Clone, Copy)]
+struct Bounds64 {
+    min: P3,
+    max: P3,
+}
+
+impl Bounds64 {
+    const EMPTY: Self = Self {
+        min: [f64::INFINITY; 3],
+        max: [f64::NEG_INFINITY; 3],
+    };
+
+    #[inline]
+    fn grow(&mut self, p: P3) {
+        for (k, x) in p.into_iter().enumerate() {
+            self.min[k] = self.min[k].min(x);
+            self.max[k] = self.max[k].max(x);
         }
     }
-    let finish =
-        |b: (DVec3, DVec3), half: &Aabb| (b.0.x <= b.1.x).then(|| rounded_bounds(b.0, b.1, half));
-    (finish(lo, &lcell), finish(hi, &rcell))
+
+    /// Rounded outwards to `f32` and cut to `cell`; `None` if no point was added.
+    fn rounded(&self, cell: &Aabb) -> Option<Aabb> {
+        if self.min[0] > self.max[0] {
+            return None;
+        }
+        let min = Vec3::from_array(self.min.map(round_down)).max(cell.min);
+        let max = Vec3::from_array(self.max.map(round_up)).min(cell.max);
+        Some(Aabb::new(min, max))
+    }
 }
 
 /// A convex polygon of up to nine vertices: a triangle clipped by at most six planes.
 #[derive(Default)]
 struct Polygon {
-    points: [DVec3; 9],
+    points: [P3; 9],
     len: usize,
 }
 
 impl Polygon {
     fn set_triangle(&mut self, v: [Vec3; 3]) {
         for (slot, p) in self.points.iter_mut().zip(v) {
-            *slot = p.as_dvec3();
+            *slot = p.as_dvec3().to_array();
         }
         self.len = 3;
     }
 
     fn bounds(&self, cell: &Aabb) -> Aabb {
-        let mut min = DVec3::INFINITY;
-        let mut max = DVec3::NEG_INFINITY;
-        for p in &self.points[..self.len] {
-            min = min.min(*p);
-            max = max.max(*p);
+        let mut b = Bounds64::EMPTY;
+        for &p in &self.points[..self.len] {
+            b.grow(p);
         }
-        rounded_bounds(min, max, cell)
+        b.rounded(cell).unwrap_or(Aabb::EMPTY)
     }
-}
-
-/// An `f64` box rounded outwards to `f32` and cut to `cell`.
-fn rounded_bounds(min: DVec3, max: DVec3, cell: &Aabb) -> Aabb {
-    let min = Vec3::from_array(min.to_array().map(round_down)).max(cell.min);
-    let max = Vec3::from_array(max.to_array().map(round_up)).min(cell.max);
-    Aabb::new(min, max)
 }
 
 enum Clipped {
@@ -133,42 +162,44 @@ fn clip_to_cell(v: [Vec3; 3], cell: &Aabb, poly: &mut Polygon) -> Option<Clipped
         return None;
     }
     poly.set_triangle(v);
-    let mut scratch = [DVec3::ZERO; 9];
-    let lo = cell.min.as_dvec3();
-    let hi = cell.max.as_dvec3();
+    // Clip back and forth between the polygon and a scratch buffer, only against the planes the
+    // triangle actually crosses.
+    let mut other = Polygon::default();
+    let (mut cur, mut next) = (poly, &mut other);
+    let mut in_poly = true;
     for axis in 0..3 {
-        // Only clip against planes the triangle actually crosses.
-        if tri_box.min[axis] < cell.min[axis] {
-            poly.len = clip_plane(&poly.points[..poly.len], &mut scratch, axis, lo[axis], true);
-            poly.points[..poly.len].copy_from_slice(&scratch[..poly.len]);
+        for (crossed, c, keep_above) in [
+            (tri_box.min[axis] < cell.min[axis], cell.min[axis], true),
+            (tri_box.max[axis] > cell.max[axis], cell.max[axis], false),
+        ] {
+            if crossed {
+                next.len = clip_plane(
+                    &cur.points[..cur.len],
+                    &mut next.points,
+                    axis,
+                    f64::from(c),
+                    keep_above,
+                );
+                std::mem::swap(&mut cur, &mut next);
+                in_poly = !in_poly;
+                if cur.len == 0 {
+                    return None;
+                }
+            }
         }
-        if poly.len > 0 && tri_box.max[axis] > cell.max[axis] {
-            poly.len = clip_plane(
-                &poly.points[..poly.len],
-                &mut scratch,
-                axis,
-                hi[axis],
-                false,
-            );
-            poly.points[..poly.len].copy_from_slice(&scratch[..poly.len]);
-        }
-        if poly.len == 0 {
-            return None;
-        }
+    }
+    if !in_poly {
+        // The result ended in the scratch buffer (now `cur`); `next` is the caller's polygon.
+        next.points = cur.points;
+        next.len = cur.len;
     }
     Some(Clipped::Polygon)
 }
 
 /// Keeps the part of the convex polygon `input` on the inner side of the plane `x[axis] = c`
 /// (`x >= c` when `keep_above`, else `x <= c`), writing it to `out` and returning its length.
-fn clip_plane(
-    input: &[DVec3],
-    out: &mut [DVec3; 9],
-    axis: usize,
-    c: f64,
-    keep_above: bool,
-) -> usize {
-    let inside = |p: &DVec3| {
+fn clip_plane(input: &[P3], out: &mut [P3; 9], axis: usize, c: f64, keep_above: bool) -> usize {
+    let inside = |p: &P3| {
         if keep_above {
             p[axis] >= c
         } else {
@@ -176,22 +207,20 @@ fn clip_plane(
         }
     };
     let mut n = 0;
-    for (i, a) in input.iter().enumerate() {
-        let b = &input[(i + 1) % input.len()];
-        let (ia, ib) = (inside(a), inside(b));
-        if ia {
-            out[n] = *a;
-            n += 1;
-        }
+    let mut a = input[input.len() - 1];
+    let mut ia = inside(&a);
+    for &b in input {
+        // Edge a -> b: emit the crossing if it changes side, then b if it is inside.
+        let ib = inside(&b);
         if ia != ib {
-            // The edge crosses the plane strictly: a and b lie on opposite sides, so the
-            // denominator is non-zero. The crossing is placed exactly on the plane.
-            let s = (c - a[axis]) / (b[axis] - a[axis]);
-            let mut p = *a + (*b - *a) * s;
-            p[axis] = c;
-            out[n] = p;
+            out[n] = crossing(a, b, axis, c);
             n += 1;
         }
+        if ib {
+            out[n] = b;
+            n += 1;
+        }
+        (a, ia) = (b, ib);
     }
     n
 }

@@ -28,52 +28,55 @@ const START: u32 = 2;
 /// The most primitives a tree can index: event tags keep the kind in their top two bits.
 pub(crate) const MAX_PRIMS: usize = (1 << 30) - 1;
 
-/// One split candidate: a position on the list's axis and `kind << 30 | primitive index`.
+/// One split candidate, packed in its own sort key: the position's bits made monotonic as an
+/// unsigned integer in the upper 32 bits, then the kind in two bits, then the primitive index.
 ///
-/// Sorting by [`Event::key`] orders by position, then kind, then primitive. That order is total,
-/// so the sorted lists (and so the tree) do not depend on the sort algorithm or on threading.
-#[derive(Clone, Copy, Debug)]
-struct Event {
-    pos: f32,
-    tag: u32,
-}
+/// Sorting by the key orders by position, then kind, then primitive. That order is total, so the
+/// sorted lists (and so the tree) do not depend on the sort algorithm or on threading. Keeping
+/// only the key makes every comparison while sorting and merging one integer comparison; the
+/// sweep decodes the position with two bit operations.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord)]
+struct Event(u64);
 
 impl Event {
-    const ZERO: Self = Self { pos: 0.0, tag: 0 };
+    const ZERO: Self = Self(0);
 
     #[inline]
     fn new(pos: f32, kind: u32, prim: u32) -> Self {
-        // `+ 0.0` turns -0.0 into +0.0, so that equal positions also have equal keys.
-        Self {
-            pos: pos + 0.0,
-            tag: (kind << 30) | prim,
-        }
-    }
-
-    #[inline(always)]
-    fn kind(self) -> u32 {
-        self.tag >> 30
-    }
-
-    #[inline(always)]
-    fn prim(self) -> usize {
-        (self.tag & MAX_PRIMS as u32) as usize
-    }
-
-    /// The sort key: the position's bits made monotonic as an integer, then the tag.
-    ///
-    /// One integer comparison instead of `total_cmp` plus a tie-break: the builder sorts and
-    /// merges by it at every node (sorting the straddlers' new events was 6% of a bunny build
-    /// in a `perf` profile).
-    #[inline(always)]
-    fn key(self) -> u64 {
-        let bits = self.pos.to_bits();
+        // `+ 0.0` turns -0.0 into +0.0, so that equal positions have equal keys.
+        let bits = (pos + 0.0).to_bits();
         let ordered = if bits >> 31 == 1 {
             !bits
         } else {
             bits | 1 << 31
         };
-        (u64::from(ordered) << 32) | u64::from(self.tag)
+        Self((u64::from(ordered) << 32) | u64::from((kind << 30) | prim))
+    }
+
+    /// The position's key bits: equal exactly when the positions are equal.
+    #[inline(always)]
+    fn pos_bits(self) -> u32 {
+        (self.0 >> 32) as u32
+    }
+
+    #[inline(always)]
+    fn pos(self) -> f32 {
+        let ordered = self.pos_bits();
+        f32::from_bits(if ordered >> 31 == 1 {
+            ordered & !(1 << 31)
+        } else {
+            !ordered
+        })
+    }
+
+    #[inline(always)]
+    fn kind(self) -> u32 {
+        (self.0 as u32) >> 30
+    }
+
+    #[inline(always)]
+    fn prim(self) -> usize {
+        (self.0 as u32 & MAX_PRIMS as u32) as usize
     }
 }
 
@@ -89,12 +92,12 @@ fn push_events(lists: &mut [Vec<Event>; 3], prim: u32, b: &Aabb) {
     }
 }
 
-/// A node waiting to be built: its cell and the sorted events of the primitives overlapping it.
+/// A node waiting to be built: its cell, and where the sorted events of the primitives
+/// overlapping it lie in the event arena.
+#[derive(Clone, Copy, Debug)]
 struct Task {
-    /// The x, y and z event lists, one after the other (one allocation instead of three).
-    events: Vec<Event>,
-    /// Where the y and z lists start in `events`.
-    starts: [usize; 2],
+    /// The x, y and z event lists, one after the other: `arena[bounds[a]..bounds[a + 1]]`.
+    bounds: [usize; 4],
     /// How many primitives overlap the cell.
     count: usize,
     cell: Aabb,
@@ -106,9 +109,16 @@ struct Task {
 impl Task {
     /// The sorted events of `axis`.
     #[inline]
-    fn axis_events(&self, axis: usize) -> &[Event] {
-        let bounds = [0, self.starts[0], self.starts[1], self.events.len()];
-        &self.events[bounds[axis]..bounds[axis + 1]]
+    fn axis_events<'a>(&self, arena: &'a [Event], axis: usize) -> &'a [Event] {
+        &arena[self.bounds[axis]..self.bounds[axis + 1]]
+    }
+
+    /// The task with its events moved from `arena` to a new arena of their own.
+    fn detach(mut self, arena: &[Event]) -> (Self, Vec<Event>) {
+        let own = arena[self.bounds[0]..self.bounds[3]].to_vec();
+        let base = self.bounds[0];
+        self.bounds = self.bounds.map(|b| b - base);
+        (self, own)
     }
 }
 
@@ -224,22 +234,23 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &KdParams) -> Built {
     if ctx.parallel && ids.len() >= PARALLEL_MIN_REFS {
         use rayon::slice::ParallelSliceMut;
         for list in &mut lists {
-            list.par_sort_unstable_by_key(|e| e.key());
+            list.par_sort_unstable();
         }
     } else {
         for list in &mut lists {
-            list.sort_unstable_by_key(|e| e.key());
+            list.sort_unstable();
         }
     }
+    let (nx, ny) = (lists[0].len(), lists[1].len());
+    let mut arena = lists.concat();
     let root = Task {
-        starts: [lists[0].len(), lists[0].len() + lists[1].len()],
-        events: lists.concat(),
+        bounds: [0, nx, nx + ny, arena.len()],
         count: ids.len(),
         cell: bounds,
         depth: 0,
         bad_refines: 0,
     };
-    build_into(&ctx, root, 0, &mut out);
+    build_into(&ctx, root, 0, &mut out, &mut arena);
     out.nodes.shrink_to_fit();
     out.refs.shrink_to_fit();
     out
@@ -250,11 +261,22 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &KdParams) -> Built {
 /// The layout is: a node's two children side by side, then the left child's descendants, then
 /// the right child's. Parallel subtrees are built into their own buffers and appended in the same
 /// order, so the output does not depend on threading.
-fn build_into<P: Primitive>(ctx: &Ctx<'_, P>, task: Task, slot: usize, out: &mut Built) {
+///
+/// The task's events are the top of `arena`, a stack (whose logical top is the current task's
+/// end; the vector itself only grows): a split replaces them with the children's (right below
+/// left), the left subtree is built on top, then the right one. So a sequential build allocates
+/// nothing per node, and the events in use stay in cache.
+fn build_into<P: Primitive>(
+    ctx: &Ctx<'_, P>,
+    task: Task,
+    slot: usize,
+    out: &mut Built,
+    arena: &mut Vec<Event>,
+) {
     out.max_depth = out.max_depth.max(task.depth as usize);
-    let (left, right, axis, pos) = match split(ctx, task) {
-        Ok(children) => children,
-        Err(leaf) => return make_leaf(leaf, slot, out),
+    let Some((left, right, axis, pos)) = split(ctx, &task, arena) else {
+        make_leaf(&task, arena, slot, out);
+        return;
     };
     let first = out.nodes.len();
     assert!(first < MAX_INDEX, "a kd-tree holds at most 2^30 nodes");
@@ -262,16 +284,22 @@ fn build_into<P: Primitive>(ctx: &Ctx<'_, P>, task: Task, slot: usize, out: &mut
     out.nodes.push(Node::leaf(0, 0));
     out.nodes.push(Node::leaf(0, 0));
     if ctx.parallel && left.count + right.count >= PARALLEL_MIN_REFS {
-        let (l, r) = rayon::join(|| subtree(ctx, left), || subtree(ctx, right));
+        let (left, mut larena) = left.detach(arena);
+        let (right, mut rarena) = right.detach(arena);
+        let (l, r) = rayon::join(
+            || subtree(ctx, left, &mut larena),
+            || subtree(ctx, right, &mut rarena),
+        );
         append(out, first, l);
         append(out, first + 1, r);
     } else {
-        build_into(ctx, left, first, out);
-        build_into(ctx, right, first + 1, out);
+        // The left subtree only writes above the right child's events.
+        build_into(ctx, left, first, out, arena);
+        build_into(ctx, right, first + 1, out, arena);
     }
 }
 
-fn make_leaf(task: Task, slot: usize, out: &mut Built) {
+fn make_leaf(task: &Task, arena: &[Event], slot: usize, out: &mut Built) {
     let first = out.refs.len();
     assert!(
         first + task.count <= MAX_INDEX + 1,
@@ -281,7 +309,7 @@ fn make_leaf(task: Task, slot: usize, out: &mut Built) {
     // Each primitive has exactly one start or planar event on every axis; list them in index
     // order, so the leaf does not depend on event order.
     out.refs.extend(
-        task.axis_events(0)
+        task.axis_events(arena, 0)
             .iter()
             .filter(|e| e.kind() != END)
             .map(|e| e.prim() as u32),
@@ -291,12 +319,12 @@ fn make_leaf(task: Task, slot: usize, out: &mut Built) {
     out.empty_leaves += usize::from(task.count == 0);
 }
 
-fn subtree<P: Primitive>(ctx: &Ctx<'_, P>, task: Task) -> Built {
+fn subtree<P: Primitive>(ctx: &Ctx<'_, P>, task: Task, arena: &mut Vec<Event>) -> Built {
     let mut out = Built {
         nodes: vec![Node::leaf(0, 0)],
         ..Built::default()
     };
-    build_into(ctx, task, 0, &mut out);
+    build_into(ctx, task, 0, &mut out, arena);
     out
 }
 
@@ -321,15 +349,18 @@ fn append(out: &mut Built, slot: usize, sub: Built) {
     out.empty_leaves += sub.empty_leaves;
 }
 
-/// Splits `task` into its two children, or gives it back when it should be a leaf.
-fn split<P: Primitive>(ctx: &Ctx<'_, P>, task: Task) -> Result<(Task, Task, usize, f32), Task> {
+/// Splits `task` into its two children, whose events replace its own at the top of `arena`, or
+/// returns `None` when it should be a leaf.
+fn split<P: Primitive>(
+    ctx: &Ctx<'_, P>,
+    task: &Task,
+    arena: &mut Vec<Event>,
+) -> Option<(Task, Task, usize, f32)> {
     let n = task.count;
     if n == 0 || n <= ctx.leaf_size || task.depth >= ctx.max_depth {
-        return Err(task);
+        return None;
     }
-    let Some(plane) = best_plane(ctx, &task) else {
-        return Err(task);
-    };
+    let plane = best_plane(ctx, task, arena)?;
     // Termination (Wald & Havran: stop when no split beats the leaf; pbrt-v4 tolerates a few
     // non-improving splits on a path, since a later split may still pay off).
     let leaf_cost = ctx.ki * n as f32;
@@ -337,17 +368,18 @@ fn split<P: Primitive>(ctx: &Ctx<'_, P>, task: Task) -> Result<(Task, Task, usiz
     if plane.cost >= leaf_cost {
         bad_refines += 1;
         if bad_refines > ctx.max_bad_refines || (plane.cost > 4.0 * leaf_cost && n < 16) {
-            return Err(task);
+            return None;
         }
     }
-    let (left, right) = SCRATCH.with_borrow_mut(|s| partition(ctx, &task, plane, bad_refines, s));
-    Ok((left, right, plane.axis, plane.pos))
+    let (left, right) =
+        SCRATCH.with_borrow_mut(|s| partition(ctx, task, plane, bad_refines, arena, s));
+    Some((left, right, plane.axis, plane.pos))
 }
 
 /// The sweep (Wald & Havran, Algorithm 4): per axis, walk the sorted events keeping the counts of
 /// primitives left of, in and right of the current plane, and price every plane strictly inside
 /// the cell.
-fn best_plane<P>(ctx: &Ctx<'_, P>, task: &Task) -> Option<Plane> {
+fn best_plane<P>(ctx: &Ctx<'_, P>, task: &Task, arena: &[Event]) -> Option<Plane> {
     let cell = &task.cell;
     let ext = cell.extent();
     let half_area = ext.x * ext.y + ext.y * ext.z + ext.z * ext.x;
@@ -360,7 +392,7 @@ fn best_plane<P>(ctx: &Ctx<'_, P>, task: &Task) -> Option<Plane> {
     let mut best: Option<Plane> = None;
     let mut best_cost = f32::INFINITY;
     for axis in 0..3 {
-        let events = task.axis_events(axis);
+        let events = task.axis_events(arena, axis);
         let (lo, hi) = (cell.min[axis], cell.max[axis]);
         if lo >= hi {
             continue;
@@ -377,19 +409,23 @@ fn best_plane<P>(ctx: &Ctx<'_, P>, task: &Task) -> Option<Plane> {
             nr -= usize::from(kind != START);
             np += usize::from(kind == PLANAR);
             ns += usize::from(kind == START);
-            if events.get(i + 1).is_some_and(|next| next.pos == e.pos) {
+            if events
+                .get(i + 1)
+                .is_some_and(|next| next.pos_bits() == e.pos_bits())
+            {
                 continue;
             }
-            if lo < e.pos && e.pos < hi {
-                let pl = ((e.pos - lo) * side + cap) * inv_area;
-                let pr = ((hi - e.pos) * side + cap) * inv_area;
+            let pos = e.pos();
+            if lo < pos && pos < hi {
+                let pl = ((pos - lo) * side + cap) * inv_area;
+                let pr = ((hi - pos) * side + cap) * inv_area;
                 let (cost, planar_left) = sah(ctx, pl, pr, nl, nr, np);
                 if cost < best_cost {
                     best_cost = cost;
                     best = Some(Plane {
                         cost,
                         axis,
-                        pos: e.pos,
+                        pos,
                         planar_left,
                     });
                 }
@@ -426,12 +462,14 @@ const LEFT: u8 = 1;
 const RIGHT: u8 = 2;
 const BOTH: u8 = 3;
 
-/// Splits the task's events at `plane` (Wald & Havran, Algorithms 5 and 6).
+/// Splits the task's events at `plane` (Wald & Havran, Algorithms 5 and 6), replacing them at
+/// the top of `arena` with the right child's events, then the left child's.
 fn partition<P: Primitive>(
     ctx: &Ctx<'_, P>,
     task: &Task,
     plane: Plane,
     bad_refines: u32,
+    arena: &mut Vec<Event>,
     scratch: &mut Scratch,
 ) -> (Task, Task) {
     let Plane {
@@ -447,13 +485,16 @@ fn partition<P: Primitive>(
     // Classify from the split axis' events alone, in one pass: a primitive ending at or before
     // the plane is left only, one starting at or after it right only, one in it goes where the
     // SAH said, the rest straddle. A start event comes before its primitive's end event.
-    let split_events = task.axis_events(axis);
+    let split_events = task.axis_events(arena, axis);
+    let plane_bits = Event::new(pos, 0, 0).pos_bits();
     for e in split_events {
         let s = &mut side[e.prim()];
         let kind = e.kind();
-        let at_start = if e.pos >= pos { RIGHT } else { BOTH };
-        let at_end = if e.pos <= pos { LEFT } else { *s };
-        let planar = if e.pos < pos || (e.pos == pos && planar_left) {
+        // Positions compare as their key bits, which keep the order.
+        let p = e.pos_bits();
+        let at_start = if p >= plane_bits { RIGHT } else { BOTH };
+        let at_end = if p <= plane_bits { LEFT } else { *s };
+        let planar = if p < plane_bits || (p == plane_bits && planar_left) {
             LEFT
         } else {
             RIGHT
@@ -466,6 +507,7 @@ fn partition<P: Primitive>(
             planar
         };
     }
+
     // Count the one-sided primitives and clip the straddlers (each has a start event on the
     // split axis, since a planar one is never on both sides).
     lnew.iter_mut().chain(rnew.iter_mut()).for_each(Vec::clear);
@@ -491,69 +533,77 @@ fn partition<P: Primitive>(
             }
         }
     }
-    // Each child has at most two events per primitive and axis (plus one slot for the
-    // branch-free filter's last speculative write).
-    let mut levents = vec![Event::ZERO; 6 * lcount + 1];
-    let mut revents = vec![Event::ZERO; 6 * rcount + 1];
+    // Room above the task for both children: at most two events per primitive and axis, plus
+    // one slot each for the branch-free filter's last speculative write.
+    let top = task.bounds[3];
+    let rcap = 6 * rcount + 1;
+    // The arena only grows: slots above the top are stale but written before they are read, so
+    // they need no zeroing (truncating and re-growing would zero 48 bytes per reference at
+    // every level).
+    let needed = top + rcap + 6 * lcount + 1;
+    if arena.len() < needed {
+        arena.resize(needed, Event::ZERO);
+    }
+    let (below, above) = arena.split_at_mut(top);
+    let (rout, lout) = above.split_at_mut(rcap);
     let (mut li, mut ri) = (0, 0);
-    let mut lstarts = [0; 2];
-    let mut rstarts = [0; 2];
+    let mut lb = [0; 4];
+    let mut rb = [0; 4];
     for a in 0..3 {
-        if a > 0 {
-            lstarts[a - 1] = li;
-            rstarts[a - 1] = ri;
-        }
+        (lb[a], rb[a]) = (li, ri);
         // Every event is written to both lists and only the index of its side advances, instead
-        // of branching on a side that is left or right at random. The straddlers' new events, sorted,
-        // are merged in on the way: before each parent event, those with smaller keys go first.
+        // of branching on a side that is left or right at random. The straddlers' new events,
+        // sorted, are merged in on the way: before each parent event, those with smaller keys
+        // go first.
         let (ln, rn) = (&mut lnew[a], &mut rnew[a]);
-        ln.sort_unstable_by_key(|e| e.key());
-        rn.sort_unstable_by_key(|e| e.key());
-        let key_at = |list: &[Event], i: usize| list.get(i).map_or(u64::MAX, |e| e.key());
+        ln.sort_unstable();
+        rn.sort_unstable();
+        let key_at = |list: &[Event], i: usize| list.get(i).map_or(u64::MAX, |e| e.0);
         let (mut lj, mut rj) = (0, 0);
         let (mut lnext, mut rnext) = (key_at(ln, 0), key_at(rn, 0));
-        for &e in task.axis_events(a) {
-            let key = e.key();
+        for &e in task.axis_events(below, a) {
+            let key = e.0;
             while lnext < key {
-                levents[li] = ln[lj];
+                lout[li] = ln[lj];
                 (li, lj) = (li + 1, lj + 1);
                 lnext = key_at(ln, lj);
             }
             while rnext < key {
-                revents[ri] = rn[rj];
+                rout[ri] = rn[rj];
                 (ri, rj) = (ri + 1, rj + 1);
                 rnext = key_at(rn, rj);
             }
             let s = side[e.prim()];
-            levents[li] = e;
+            lout[li] = e;
             li += usize::from(s == LEFT);
-            revents[ri] = e;
+            rout[ri] = e;
             ri += usize::from(s == RIGHT);
         }
         for &e in &ln[lj..] {
-            levents[li] = e;
+            lout[li] = e;
             li += 1;
         }
         for &e in &rn[rj..] {
-            revents[ri] = e;
+            rout[ri] = e;
             ri += 1;
         }
     }
-    levents.truncate(li);
-    revents.truncate(ri);
+    (lb[3], rb[3]) = (li, ri);
+    // Move the children down over the parent's events: right first, then left on top.
+    let base = task.bounds[0];
+    arena.copy_within(top..top + ri, base);
+    arena.copy_within(top + rcap..top + rcap + li, base + ri);
     let depth = task.depth + 1;
     (
         Task {
-            events: levents,
-            starts: lstarts,
+            bounds: lb.map(|b| b + base + ri),
             count: lcount,
             cell: task.cell.with_max(axis, pos),
             depth,
             bad_refines,
         },
         Task {
-            events: revents,
-            starts: rstarts,
+            bounds: rb.map(|b| b + base),
             count: rcount,
             cell: task.cell.with_min(axis, pos),
             depth,

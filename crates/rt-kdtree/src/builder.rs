@@ -165,6 +165,9 @@ struct Plane {
     pos: f32,
     /// Whether primitives lying in the plane go to the left child.
     planar_left: bool,
+    /// Primitives in the left and right child.
+    left_count: usize,
+    right_count: usize,
 }
 
 /// What the builder hands to [`KdTree`](crate::KdTree).
@@ -371,8 +374,11 @@ fn split<P: Primitive>(
             return None;
         }
     }
-    let (left, right) =
-        SCRATCH.with_borrow_mut(|s| partition(ctx, task, plane, bad_refines, arena, s));
+    let (left, right) = if plane.left_count == 0 || plane.right_count == 0 {
+        cut_empty(task, plane, bad_refines)
+    } else {
+        SCRATCH.with_borrow_mut(|s| partition(ctx, task, plane, bad_refines, arena, s))
+    };
     Some((left, right, plane.axis, plane.pos))
 }
 
@@ -427,6 +433,8 @@ fn best_plane<P>(ctx: &Ctx<'_, P>, task: &Task, arena: &[Event]) -> Option<Plane
                         axis,
                         pos,
                         planar_left,
+                        left_count: nl + if planar_left { np } else { 0 },
+                        right_count: nr + if planar_left { 0 } else { np },
                     });
                 }
             }
@@ -458,6 +466,56 @@ fn sah<P>(ctx: &Ctx<'_, P>, pl: f32, pr: f32, nl: usize, nr: usize, np: usize) -
     (if left { cl } else { cr }, left)
 }
 
+/// A split with one side empty: the other child holds every primitive with unchanged events
+/// (each one's part in the cell already lies on that side), so it reuses the parent's events in
+/// place. PERF: most splits of a Wald & Havran tree cut off empty space (on the bunny, 59% of the
+/// leaves are empty); skipping their partition took a single-threaded bunny build from 380 to
+/// 342 ms (best of 7 builds, same tree).
+fn cut_empty(task: &Task, plane: Plane, bad_refines: u32) -> (Task, Task) {
+    let depth = task.depth + 1;
+    let top = task.bounds[3];
+    let empty = Task {
+        bounds: [top; 4],
+        count: 0,
+        cell: task.cell,
+        depth,
+        bad_refines,
+    };
+    let full = Task {
+        count: task.count,
+        depth,
+        bad_refines,
+        ..*task
+    };
+    let (lcell, rcell) = (
+        task.cell.with_max(plane.axis, plane.pos),
+        task.cell.with_min(plane.axis, plane.pos),
+    );
+    if plane.left_count == 0 {
+        (
+            Task {
+                cell: lcell,
+                ..empty
+            },
+            Task {
+                cell: rcell,
+                ..full
+            },
+        )
+    } else {
+        (
+            Task {
+                cell: lcell,
+                ..full
+            },
+            Task {
+                cell: rcell,
+                ..empty
+            },
+        )
+    }
+}
+
 const LEFT: u8 = 1;
 const RIGHT: u8 = 2;
 const BOTH: u8 = 3;
@@ -484,43 +542,24 @@ fn partition<P: Primitive>(
     }
     // Classify from the split axis' events alone, in one pass: a primitive ending at or before
     // the plane is left only, one starting at or after it right only, one in it goes where the
-    // SAH said, the rest straddle. A start event comes before its primitive's end event.
-    let split_events = task.axis_events(arena, axis);
-    let plane_bits = Event::new(pos, 0, 0).pos_bits();
-    for e in split_events {
-        let s = &mut side[e.prim()];
-        let kind = e.kind();
-        // Positions compare as their key bits, which keep the order.
-        let p = e.pos_bits();
-        let at_start = if p >= plane_bits { RIGHT } else { BOTH };
-        let at_end = if p <= plane_bits { LEFT } else { *s };
-        let planar = if p < plane_bits || (p == plane_bits && planar_left) {
-            LEFT
-        } else {
-            RIGHT
-        };
-        *s = if kind == START {
-            at_start
-        } else if kind == END {
-            at_end
-        } else {
-            planar
-        };
-    }
-
-    // Count the one-sided primitives and clip the straddlers (each has a start event on the
-    // split axis, since a planar one is never on both sides).
+    // SAH said, and one starting before and ending after straddles: it is clipped to both
+    // children when its end event comes (a start event comes before its end event). Positions
+    // compare as their key bits, which keep the order. (PERF: one pass instead of classifying
+    // and then counting: bunny build 342 -> 324 ms, best of 7.)
     lnew.iter_mut().chain(rnew.iter_mut()).for_each(Vec::clear);
+    let plane_bits = Event::new(pos, 0, 0).pos_bits();
     let (mut lcount, mut rcount) = (0, 0);
-    for e in split_events {
-        if e.kind() == END {
-            continue;
-        }
-        match side[e.prim()] {
-            LEFT => lcount += 1,
-            RIGHT => rcount += 1,
-            _ => {
-                let prim = e.prim();
+    for e in task.axis_events(arena, axis) {
+        let prim = e.prim();
+        let p = e.pos_bits();
+        match e.kind() {
+            START => side[prim] = if p >= plane_bits { RIGHT } else { BOTH },
+            END if p <= plane_bits => {
+                side[prim] = LEFT;
+                lcount += 1;
+            }
+            END if side[prim] == RIGHT => rcount += 1,
+            END => {
                 let (lb, rb) = clip_both(ctx, &ctx.prims[prim], &task.cell, axis, pos);
                 if let Some(b) = lb {
                     push_events(lnew, prim as u32, &b);
@@ -530,6 +569,12 @@ fn partition<P: Primitive>(
                     push_events(rnew, prim as u32, &b);
                     rcount += 1;
                 }
+            }
+            _ => {
+                let left = p < plane_bits || (p == plane_bits && planar_left);
+                side[prim] = if left { LEFT } else { RIGHT };
+                lcount += usize::from(left);
+                rcount += usize::from(!left);
             }
         }
     }

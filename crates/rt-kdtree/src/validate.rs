@@ -106,3 +106,79 @@ impl<P: Primitive> KdTree<P> {
         Ok(())
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use crate::{KdParams, KdTree, Node};
+    use rt_core::{Accel, Triangle, scenes};
+
+    fn tree() -> KdTree<Triangle> {
+        KdTree::build(&scenes::random_soup(500, 1).triangles(), &KdParams::sah())
+    }
+
+    fn message(t: &KdTree<Triangle>) -> String {
+        t.validate()
+            .expect_err("the corruption must be caught")
+            .message
+    }
+
+    /// `validate` accepts a built tree and rejects each kind of corruption it claims to detect.
+    #[test]
+    fn detects_each_broken_invariant() {
+        assert_eq!(tree().validate(), Ok(()));
+        let interior = |t: &KdTree<Triangle>| t.nodes.iter().position(|n| !n.is_leaf()).unwrap();
+        let full_leaf = |t: &KdTree<Triangle>| {
+            t.nodes
+                .iter()
+                .position(|n| n.is_leaf() && n.count() > 0)
+                .unwrap()
+        };
+
+        // A split plane outside its cell.
+        let mut t = tree();
+        let i = interior(&t);
+        let n = t.nodes[i];
+        t.nodes[i] = Node::interior(n.axis(), t.bounds.max[n.axis()] + 1.0, n.index());
+        assert!(message(&t).contains("not inside the cell"));
+
+        // A child pointing back at the root: a cycle.
+        let mut t = tree();
+        t.nodes[0] = Node::interior(t.nodes[0].axis(), t.nodes[0].split(), 0);
+        assert!(message(&t).contains("out of order or bounds"));
+
+        // A leaf whose references run past the list.
+        let mut t = tree();
+        let i = full_leaf(&t);
+        t.nodes[i] = Node::leaf(t.refs.len(), 1);
+        assert!(message(&t).contains("out of bounds"));
+
+        // A reference to a primitive that does not exist.
+        let mut t = tree();
+        let i = full_leaf(&t);
+        t.refs[t.nodes[i].index()] = 100_000;
+        assert!(message(&t).contains("missing or invalid"));
+
+        // A reference to a primitive far from the leaf's cell.
+        let mut t = tree();
+        t.prims[t.refs[0] as usize] = Triangle::new(
+            rt_core::glam::Vec3::splat(1e6),
+            rt_core::glam::Vec3::new(1e6 + 1.0, 1e6, 1e6),
+            rt_core::glam::Vec3::new(1e6, 1e6 + 1.0, 1e6),
+        );
+        assert!(message(&t).contains("does not overlap"));
+
+        // A primitive no leaf references: empty every leaf that holds primitive 0.
+        let mut t = tree();
+        for n in t.nodes.iter_mut() {
+            if n.is_leaf() && t.refs[n.index()..n.index() + n.count()].contains(&0) {
+                *n = Node::leaf(0, 0);
+            }
+        }
+        assert!(message(&t).contains("is in no leaf"));
+
+        // Statistics that do not match the tree.
+        let mut t = tree();
+        t.leaves += 1;
+        assert!(message(&t).contains("stats say"));
+    }
+}

@@ -54,7 +54,8 @@ impl fmt::Display for Mismatch {
     }
 }
 
-/// Compares `accel` with `reference` on every ray, returning the first disagreement.
+/// Compares `accel` with `reference` on every valid ray (see [`Ray::is_valid`]), returning the
+/// first disagreement. Invalid rays are traced too, and only have to return.
 ///
 /// # Errors
 /// The first [`Mismatch`].
@@ -64,6 +65,12 @@ pub fn compare_rays<A: Accel>(
     rays: &[Ray],
 ) -> Result<(), Mismatch> {
     for ray in rays {
+        if !ray.is_valid() {
+            // Outside the trait's precondition the answer is unspecified, but the structure must
+            // still return: no panic, no endless loop.
+            let _ = (accel.intersect(ray), accel.occluded(ray));
+            continue;
+        }
         let expected = reference.intersect(ray);
         let got = accel.intersect(ray);
         if !Hit::agree(expected, got) {
@@ -162,6 +169,7 @@ pub const SCENES: &[&str] = &[
     "exponential_chain",
     "planar_triangles",
     "spanning_triangles",
+    "invalid_rays",
 ];
 
 /// The adversarial scene called `name` (one of [`SCENES`]).
@@ -186,6 +194,7 @@ pub fn scene(name: &str) -> Scene {
         "nan_vertex" => nan_vertex(),
         "planar_triangles" => planar_triangles(),
         "spanning_triangles" => spanning_triangles(),
+        "invalid_rays" => invalid_rays(),
         "exponential_chain" => exponential_chain(),
         _ => panic!("unknown conformance scene `{name}`; see rt_core::conformance::SCENES"),
     }
@@ -339,7 +348,7 @@ macro_rules! conformance_tests {
                 empty_scene one_triangle shared_edge identical_triangles equal_centroids
                 zero_area_triangles axis_parallel_rays rays_in_box_faces origins_inside
                 large_coordinates nan_vertex exponential_chain planar_triangles
-                spanning_triangles);
+                spanning_triangles invalid_rays);
             #[test]
             fn random_scenes() {
                 $crate::conformance::check_random::<$accel>(&params());
@@ -786,6 +795,27 @@ fn spanning_triangles() -> Scene {
         Vec3::splat(2.0),
         400,
     ));
+    Scene { triangles, rays }
+}
+
+/// Rays a caller should not send (`Ray::is_valid` is false): NaN or infinite origins, zero,
+/// infinite or NaN directions, empty or NaN intervals. Their answers are unspecified (structures
+/// do not check rays on the hot path), but a structure must return: no panic, no endless loop.
+fn invalid_rays() -> Scene {
+    let mut rng = Rng::new(15);
+    let triangles = soup(&mut rng, 300, Vec3::splat(-1.0), Vec3::ONE, 0.3);
+    let (nan, inf) = (f32::NAN, f32::INFINITY);
+    let rays = vec![
+        Ray::new(Vec3::new(nan, 0.0, 0.0), Vec3::X),
+        Ray::new(Vec3::ZERO, Vec3::new(nan, 1.0, 0.0)),
+        Ray::new(Vec3::ZERO, Vec3::ZERO),
+        Ray::new(Vec3::splat(inf), -Vec3::ONE),
+        Ray::new(Vec3::splat(-inf), Vec3::ONE),
+        Ray::new(Vec3::ZERO, Vec3::new(inf, 1.0, 0.0)),
+        Ray::with_interval(Vec3::splat(-2.0), Vec3::ONE, 3.0, 1.0),
+        Ray::with_interval(Vec3::splat(-2.0), Vec3::ONE, nan, nan),
+        Ray::with_interval(Vec3::splat(-2.0), Vec3::ONE, -inf, inf),
+    ];
     Scene { triangles, rays }
 }
 

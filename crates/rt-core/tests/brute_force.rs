@@ -43,7 +43,8 @@ fn agrees_with_a_double_precision_oracle_where_the_answer_is_clear() {
     for name in SCENES {
         let s = conformance::scene(name);
         let bf = BruteForce::build(&s.triangles, &());
-        for r in &s.rays {
+        // The oracle only speaks for rays inside the precondition.
+        for r in s.rays.iter().filter(|r| r.is_valid()) {
             let mut hits: Vec<(f64, u32, f64, f64)> = s
                 .triangles
                 .iter()

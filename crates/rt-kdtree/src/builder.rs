@@ -129,6 +129,8 @@ struct Scratch {
     /// Which side each primitive goes to, indexed by primitive; only the current node's entries
     /// are meaningful.
     side: Vec<u8>,
+    /// The current node's straddling primitives (with one spare slot for a speculative write).
+    straddlers: Vec<u32>,
     lnew: [Vec<Event>; 3],
     rnew: [Vec<Event>; 3],
 }
@@ -599,7 +601,10 @@ fn partition<P: Primitive>(
         ..
     } = plane;
     let Scratch {
-        side, lnew, rnew, ..
+        side,
+        straddlers,
+        lnew,
+        rnew,
     } = scratch;
     if side.len() < ctx.prims.len() {
         side.resize(ctx.prims.len(), BOTH);
@@ -618,33 +623,47 @@ fn partition<P: Primitive>(
     // and its bounds cut to each child say so. (PERF: 40k of the 391k clips of the bunny build with
     // one bad refine are at the last level.)
     let exact = task.depth + 1 < ctx.max_depth;
+    if straddlers.len() <= task.count {
+        straddlers.resize(task.count + 1, 0);
+    }
+    let mut ns = 0;
     for e in task.axis_events(arena, axis) {
         let prim = e.prim();
         let p = e.pos_bits();
-        match e.kind() {
-            START => side[prim] = if p >= plane_bits { RIGHT } else { BOTH },
-            END if p <= plane_bits => {
-                side[prim] = LEFT;
-                lcount += 1;
-            }
-            END if side[prim] == RIGHT => rcount += 1,
-            END => {
-                let (lb, rb) = clip_both(ctx, &ctx.prims[prim], &task.cell, axis, pos, exact);
-                if let Some(b) = lb {
-                    push_events(lnew, prim as u32, &b);
-                    lcount += 1;
-                }
-                if let Some(b) = rb {
-                    push_events(rnew, prim as u32, &b);
-                    rcount += 1;
-                }
-            }
-            _ => {
-                let left = p < plane_bits || (p == plane_bits && planar_left);
-                side[prim] = if left { LEFT } else { RIGHT };
-                lcount += usize::from(left);
-                rcount += usize::from(!left);
-            }
+        let kind = e.kind();
+        // The event's verdict for its primitive, chosen by table rather than by branching on
+        // the kind, which is random. (PERF: bunny build with one bad refine 353 -> 347 ms, best of
+        // 30 interleaved builds; same tree.)
+        let old = side[prim];
+        let verdicts = [
+            // END: left if it ends at or before the plane, else what its start said.
+            if p <= plane_bits { LEFT } else { old },
+            // PLANAR: its side of the plane, or the SAH's side if it is in the plane.
+            if p < plane_bits || (p == plane_bits && planar_left) {
+                LEFT
+            } else {
+                RIGHT
+            },
+            // START: right if it starts at or after the plane, else undecided until its end.
+            if p >= plane_bits { RIGHT } else { BOTH },
+        ];
+        let verdict = verdicts[kind as usize];
+        side[prim] = verdict;
+        let last = kind != START;
+        lcount += usize::from(last & (verdict == LEFT));
+        rcount += usize::from(last & (verdict == RIGHT));
+        straddlers[ns] = prim as u32;
+        ns += usize::from(last & (verdict == BOTH));
+    }
+    for &prim in &straddlers[..ns] {
+        let (lb, rb) = clip_both(ctx, &ctx.prims[prim as usize], &task.cell, axis, pos, exact);
+        if let Some(b) = lb {
+            push_events(lnew, prim, &b);
+            lcount += 1;
+        }
+        if let Some(b) = rb {
+            push_events(rnew, prim, &b);
+            rcount += 1;
         }
     }
     // Room above the task for both children: at most two events per primitive and axis, plus

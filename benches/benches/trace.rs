@@ -80,6 +80,7 @@ fn bench_build(c: &mut Criterion, scene: &BenchScene) {
     // Single-threaded, as the kd-tree issue's build-time bound asks (rt-bvh's build is serial).
     for (preset, params) in [
         ("sah", KdParams::sah()),
+        ("wald-havran", KdParams::wald_havran()),
         ("noclip", KdParams::noclip()),
         ("pbrt", KdParams::pbrt()),
     ] {
@@ -125,6 +126,7 @@ fn bench_trace(c: &mut Criterion, scene: &BenchScene) {
     });
     for (label, params) in [
         ("rt-kdtree/stack", KdParams::sah()),
+        ("rt-kdtree/wald-havran", KdParams::wald_havran()),
         ("rt-kdtree/restart", KdParams::restart()),
     ] {
         let kd = KdTree::build(&scene.triangles, &params);

@@ -119,6 +119,7 @@ fn default_scene_json_has_every_field_and_no_mismatch() {
             "bvh-median",
             "bvh-middle",
             "kdtree",
+            "kdtree-wald-havran",
             "kdtree-restart",
             "kdtree-noclip",
             "kdtree-pbrt"
@@ -230,6 +231,14 @@ fn meshes_all_ray_kinds_agree_and_sah_beats_median() {
             assert!(kd["empty_leaves"].as_u64() < kd["leaves"].as_u64(), "{kd}");
             if mesh == "stanford-bunny.obj" && kind == "primary" {
                 assert!(tests("bvh") <= 12.0, "SAH: {} tests per ray", tests("bvh"));
+                // Issue 3's target: the default kd-tree needs fewer primitive tests than the SAH
+                // BVH on the bunny's primary rays (0.765 against 0.792 at this resolution).
+                assert!(
+                    tests("kdtree") < tests("bvh"),
+                    "kd-tree {} vs BVH {}",
+                    tests("kdtree"),
+                    tests("bvh")
+                );
                 assert!(
                     tests("bvh") < tests("bvh-median"),
                     "SAH {} vs median {}",

@@ -1,12 +1,14 @@
-//! How the SAH constants shape a kd-tree: nodes, duplication, and visits and primitive tests per
-//! primary ray, for a range of traversal costs and bad-refine allowances.
+//! How the build constants shape a kd-tree: nodes, duplication, visits and primitive tests per
+//! primary ray, and single-threaded build time, from Wald & Havran's published constants to the
+//! default.
 //!
 //! ```sh
 //! cargo run --release -p rt-kdtree --example cost_sweep -- ../shared/meshes/stanford-bunny.obj
 //! ```
 //!
-//! The counts are deterministic; the build times are one single-threaded run each, so compare
-//! them only within one run.
+//! The rays are `cargo xtask compare`'s default primary rays (1024×768). The counts are
+//! deterministic; a build time is the best of three single-threaded builds, so compare the times
+//! only within one run.
 
 use rt_core::raygen::Camera;
 use rt_core::{Accel, Counters};
@@ -19,39 +21,70 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .unwrap_or_else(|| "../shared/meshes/stanford-bunny.obj".into());
     let mesh = rt_core::load_obj(&path)?;
     let tris = mesh.triangles();
-    let rays = Camera::framing(&mesh.bounds(), 512, 384).primary_rays(512, 384);
+    let rays = Camera::framing(&mesh.bounds(), 1024, 768).primary_rays(1024, 768);
     println!(
         "{path}: {} triangles, {} primary rays",
         tris.len(),
         rays.len()
     );
-    println!("K_T  bad  nodes    depth  refs/prim  visits/ray  tests/ray  build ms");
-    for bad in [0, 1] {
-        for kt in [30.0, 15.0, 10.0, 7.0, 5.0] {
-            let params = KdParams {
-                traversal_cost: kt,
-                max_bad_refines: bad,
-                parallel: false,
+    let wh = KdParams::wald_havran();
+    let rows = [
+        ("Wald & Havran (K_T 15)", wh.clone()),
+        (
+            "  with K_T 5",
+            KdParams {
+                traversal_cost: 5.0,
+                ..wh.clone()
+            },
+        ),
+        (
+            "  with 1 bad refine",
+            KdParams {
+                max_bad_refines: 1,
+                ..wh.clone()
+            },
+        ),
+        (
+            "K_T 25, 3 bad refines, depth 7+",
+            KdParams {
+                empty_cut: 0.0,
                 ..KdParams::sah()
-            };
+            },
+        ),
+        ("  with empty cut 0.25 (sah)", KdParams::sah()),
+    ];
+    println!(
+        "{:<32} {:>9} {:>5} {:>9} {:>10} {:>9} {:>8}",
+        "configuration", "nodes", "depth", "refs/prim", "visits/ray", "tests/ray", "build ms"
+    );
+    for (name, params) in rows {
+        let params = KdParams {
+            parallel: false,
+            ..params
+        };
+        let mut best_ms = f64::INFINITY;
+        let mut tree = None;
+        for _ in 0..3 {
             let start = Instant::now();
-            let tree = KdTree::build(&tris, &params);
-            let ms = start.elapsed().as_secs_f64() * 1e3;
-            let mut c = Counters::default();
-            for r in &rays {
-                tree.intersect_with(r, &mut c);
-            }
-            let s = tree.build_stats();
-            let per_ray = |x: u64| x as f64 / rays.len() as f64;
-            println!(
-                "{kt:<4} {bad:<4} {:<8} {:<6} {:<10.2} {:<11.1} {:<10.3} {ms:.0}",
-                s.nodes,
-                s.max_depth,
-                s.duplication(),
-                per_ray(c.node_visits),
-                per_ray(c.prim_tests),
-            );
+            let built = KdTree::build(&tris, &params);
+            best_ms = best_ms.min(start.elapsed().as_secs_f64() * 1e3);
+            tree = Some(built);
         }
+        let tree = tree.expect("built at least once");
+        let mut c = Counters::default();
+        for r in &rays {
+            tree.intersect_with(r, &mut c);
+        }
+        let s = tree.build_stats();
+        let per_ray = |x: u64| x as f64 / rays.len() as f64;
+        println!(
+            "{name:<32} {:>9} {:>5} {:>9.2} {:>10.1} {:>9.3} {best_ms:>8.0}",
+            s.nodes,
+            s.max_depth,
+            s.duplication(),
+            per_ray(c.node_visits),
+            per_ray(c.prim_tests),
+        );
     }
     Ok(())
 }

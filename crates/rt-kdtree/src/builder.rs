@@ -189,11 +189,30 @@ struct Ctx<'a, P> {
     kt: f32,
     ki: f32,
     empty_factor: f32,
+    empty_cut: f32,
     perfect: bool,
     max_depth: u32,
     max_bad_refines: u32,
     leaf_size: usize,
     parallel: bool,
+}
+
+impl<'a, P> Ctx<'a, P> {
+    /// The build context for `valid` valid primitives among `prims`.
+    fn new(prims: &'a [P], params: &KdParams, valid: usize) -> Self {
+        Self {
+            prims,
+            kt: params.traversal_cost.max(0.0),
+            ki: params.intersection_cost.max(f32::MIN_POSITIVE),
+            empty_factor: 1.0 - params.empty_bonus.clamp(0.0, 1.0),
+            empty_cut: params.empty_cut,
+            perfect: params.perfect_splits,
+            max_depth: params.resolved_max_depth(valid),
+            max_bad_refines: params.max_bad_refines,
+            leaf_size: params.leaf_size as usize,
+            parallel: params.parallel,
+        }
+    }
 }
 
 pub(crate) fn build<P: Primitive>(prims: &[P], params: &KdParams) -> Built {
@@ -219,17 +238,7 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &KdParams) -> Built {
         out.empty_leaves = 1;
         return out;
     }
-    let ctx = Ctx {
-        prims,
-        kt: params.traversal_cost.max(0.0),
-        ki: params.intersection_cost.max(f32::MIN_POSITIVE),
-        empty_factor: 1.0 - params.empty_bonus.clamp(0.0, 1.0),
-        perfect: params.perfect_splits,
-        max_depth: params.resolved_max_depth(ids.len()),
-        max_bad_refines: params.max_bad_refines,
-        leaf_size: params.leaf_size as usize,
-        parallel: params.parallel,
-    };
+    let ctx = Ctx::new(prims, params, ids.len());
     // The scene box is the union of the primitives' bounds, so every valid primitive meets it and
     // its part in it is its whole bounds.
     let mut lists: [Vec<Event>; 3] = Default::default();
@@ -364,6 +373,10 @@ fn split<P: Primitive>(
     if !may_split(ctx, task.count, task.depth) {
         return None;
     }
+    if let Some(plane) = empty_space(ctx, task, arena) {
+        let (left, right) = cut_empty(task, plane, task.bad_refines);
+        return Some((left, right, plane.axis, plane.pos));
+    }
     let plane = best_plane(ctx, task, arena)?;
     let bad_refines = accept(ctx, task.count, task.bad_refines, &plane)?;
     let (left, right) = if plane.left_count == 0 || plane.right_count == 0 {
@@ -372,6 +385,57 @@ fn split<P: Primitive>(
         SCRATCH.with_borrow_mut(|s| partition(ctx, task, plane, bad_refines, arena, s))
     };
     Some((left, right, plane.axis, plane.pos))
+}
+
+/// The cut that removes the largest empty slab from the cell, if that slab spans at least
+/// `empty_cut` of the cell's extent on its axis.
+///
+/// The primitives' parts span from the first to the last event of each sorted list, so the
+/// empty slabs at the six faces cost O(1) to find. A wide empty slab is what the SAH with an
+/// empty-side bonus would cut anyway; cutting it without pricing every candidate saves the sweep
+/// of every node along a chain of such cuts. (PERF: with the default constants on the bunny,
+/// single-threaded, best of 9: build 326 -> 302 ms, 853k -> 823k nodes, 0.758 -> 0.764 primitive
+/// tests per primary ray.)
+fn empty_space<P>(ctx: &Ctx<'_, P>, task: &Task, arena: &[Event]) -> Option<Plane> {
+    if ctx.empty_cut <= 0.0 {
+        return None;
+    }
+    let mut best: Option<(f32, Plane)> = None;
+    for axis in 0..3 {
+        let events = task.axis_events(arena, axis);
+        let (lo, hi) = (task.cell.min[axis], task.cell.max[axis]);
+        let (Some(first), Some(last)) = (events.first(), events.last()) else {
+            continue;
+        };
+        let (first, last) = (first.pos(), last.pos());
+        let extent = hi - lo;
+        // Left empty: the plane at the parts' lowest bound, with primitives lying in it going
+        // right; right empty: at their highest bound, with those in it going left.
+        for (gap, pos, planar_left) in [(first - lo, first, false), (hi - last, last, true)] {
+            let fraction = gap / extent;
+            if lo < pos
+                && pos < hi
+                && fraction >= ctx.empty_cut
+                && best.is_none_or(|b| fraction > b.0)
+            {
+                let (left_count, right_count) = if planar_left {
+                    (task.count, 0)
+                } else {
+                    (0, task.count)
+                };
+                let plane = Plane {
+                    cost: f32::NAN,
+                    axis,
+                    pos,
+                    planar_left,
+                    left_count,
+                    right_count,
+                };
+                best = Some((fraction, plane));
+            }
+        }
+    }
+    best.map(|(_, plane)| plane)
 }
 
 /// Whether a node of `n` primitives at `depth` may be split at all.
@@ -770,5 +834,44 @@ fn clip_both<P: Primitive>(
         // rounding lost it on both sides, keep the loose parts rather than drop it.
         (None, None) => loose(),
         parts => parts,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rt_core::Triangle;
+    use rt_core::glam::Vec3;
+
+    #[test]
+    fn empty_space_cuts_the_widest_slab_at_the_parts_bounds() {
+        // The triangle spans x 0.6..0.9 and y 0.1..0.2 and lies in the plane z = 0.1 of the unit
+        // cell: the widest empty slab is z 0.1..1, 90% of the cell.
+        let tri = [Triangle::new(
+            Vec3::new(0.6, 0.1, 0.1),
+            Vec3::new(0.9, 0.1, 0.1),
+            Vec3::new(0.9, 0.2, 0.1),
+        )];
+        let mut lists: [Vec<Event>; 3] = Default::default();
+        push_events(&mut lists, 0, &tri[0].bounds());
+        let (nx, ny) = (lists[0].len(), lists[1].len());
+        let arena = lists.concat();
+        let task = Task {
+            bounds: [0, nx, nx + ny, arena.len()],
+            count: 1,
+            cell: Aabb::new(Vec3::ZERO, Vec3::ONE),
+            depth: 0,
+            bad_refines: 0,
+        };
+        let mut params = KdParams::sah();
+        let plane = empty_space(&Ctx::new(&tri, &params, 1), &task, &arena).unwrap();
+        // The flat triangle lies in the plane and stays with the non-empty (left) side.
+        assert_eq!((plane.axis, plane.pos, plane.planar_left), (2, 0.1, true));
+        assert_eq!((plane.left_count, plane.right_count), (1, 0));
+        // No slab is that wide, or the heuristic is off: the SAH decides.
+        params.empty_cut = 0.95;
+        assert!(empty_space(&Ctx::new(&tri, &params, 1), &task, &arena).is_none());
+        params.empty_cut = 0.0;
+        assert!(empty_space(&Ctx::new(&tri, &params, 1), &task, &arena).is_none());
     }
 }

@@ -17,8 +17,13 @@
 //!   cell `V` into `V_L`, `V_R` with `N_L`, `N_R` primitives costs
 //!   `λ · (K_T + K_I · (P_L · N_L + P_R · N_R))`, with `P = SA(child) / SA(V)` and `λ =
 //!   1 - empty_bonus` when one side is empty; a leaf costs `K_I · N`. A node becomes a leaf when
-//!   no plane beats the leaf cost (or after `max_bad_refines` such planes on one path), when it
-//!   holds at most `leaf_size` primitives, or at the depth limit `8 + 1.3 · log2 N`.
+//!   no plane beats the leaf cost (or after `max_bad_refines` such planes on one path, as in
+//!   pbrt), when it holds at most `leaf_size` primitives, or at the depth limit
+//!   `depth_base + 1.3 · log2 N` (pbrt: `8 + 1.3 · log2 N`).
+//! - **Empty space** (`empty_cut`): an empty slab at a face of the cell that spans at least this
+//!   fraction of the cell's extent is cut off without pricing any plane. The SAH with an
+//!   empty-side bonus would pick most such cuts anyway; skipping the sweep there saves 7% of the
+//!   default build on the bunny for 1% more primitive tests.
 //! - **O(N log N) build**: the split candidates (the bounds of each primitive's part in the cell,
 //!   per axis) are sorted once, and each node splits the sorted lists in linear time; only the
 //!   primitives straddling the plane get new candidates, which are sorted and merged in.
@@ -56,48 +61,56 @@
 //!
 //! # Measured
 //! Stanford bunny (69,451 triangles), one run of `cargo xtask compare --scene
-//! ../shared/meshes/stanford-bunny.obj` (1024×768 primary rays, 2 threads, build on 2 threads),
-//! with the SAH BVH for reference:
+//! ../shared/meshes/stanford-bunny.obj` (1024×768 primary rays, 2 threads, builds on 2 threads,
+//! fastest of 3), with the SAH BVH for reference:
 //!
 //! | row | build ms | MiB | nodes | depth | empty leaves | prims/leaf | refs/prim | visits/ray | tests/ray | Mrays/s |
 //! | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |
-//! | `kdtree` (`sah`) | 189.8 | 8.44 | 612,253 | 29 | 59.1% | 2.90 | 5.23 | 14.3 | 1.0 | 17.6 |
-//! | `kdtree-restart` | 187.3 | 8.44 | 612,253 | 29 | 59.1% | 2.90 | 5.23 | 36.2 | 1.0 | 8.34 |
-//! | `kdtree-noclip` | 170.0 | 8.19 | 551,455 | 29 | 42.3% | 2.64 | 6.05 | 15.0 | 1.3 | 12.8 |
-//! | `kdtree-pbrt` | 116.5 | 4.34 | 149,293 | 29 | 44.7% | 5.19 | 3.09 | 16.6 | 4.5 | 8.58 |
-//! | `bvh` | 38.2 | 5.01 | 77,359 | 19 | 0% | 1.80 | 1.00 | 6.8 | 0.8 | 20.2 |
+//! | `kdtree` (`sah`) | 242.6 | 10.27 | 822,567 | 28 | 57.4% | 2.42 | 6.09 | 15.1 | 0.764 | 14.6 |
+//! | `kdtree-wald-havran` | 203.4 | 8.44 | 612,317 | 29 | 59.1% | 2.90 | 5.23 | 14.3 | 1.04 | 13.7 |
+//! | `kdtree-restart` | 199.7 | 10.27 | 822,567 | 28 | 57.4% | 2.42 | 6.09 | 40.3 | 0.774 | 6.69 |
+//! | `kdtree-noclip` | 228.0 | 12.24 | 980,053 | 28 | 37.4% | 2.03 | 8.98 | 16.1 | 0.814 | 11.1 |
+//! | `kdtree-pbrt` | 107.8 | 4.34 | 149,303 | 29 | 44.7% | 5.19 | 3.09 | 16.6 | 4.54 | 8.24 |
+//! | `bvh` | 42.1 | 5.01 | 77,359 | 19 | 0% | 1.80 | 1.00 | 6.8 | 0.793 | 17.4 |
 //!
-//! Perfect splits cut the primitive tests per ray from 1.3 to 1.0 and make the tree 1.4× faster
-//! (`noclip` against `sah`). The stackless traversal pays for its restarts with 2.5× the node
-//! visits and half the speed: on a CPU a 64-entry stack costs nothing worth saving.
+//! The default tree tests fewer triangles per primary ray than the SAH BVH (0.764 against
+//! 0.793). Perfect splits save 6% of the tests and 16% of the memory and make the tree 1.3×
+//! faster (`noclip` against `sah`). The stackless traversal pays for its restarts with 2.7× the
+//! node visits and half the speed: on a CPU a 64-entry stack costs nothing worth saving.
 //!
-//! Single-threaded, one run of `cargo bench -p rt-benches --bench trace` (criterion medians):
-//! the `sah` build takes 324.6 ms on the bunny, 9.1× the SAH BVH's 35.8 ms (sphereflake: 138.7
-//! against 34.6 ms, 4.0×); the parallel build takes 184.0 ms on 2 threads. Primary rays at
-//! 512×384 trace at 0.78× the BVH's speed on the bunny (6.90 against 8.89 Mrays/s; restart 3.92)
-//! and 0.85× on the sphereflake (10.3 against 12.1; restart 6.52). On the teapot (6,320
-//! triangles) the kd-tree is the faster one: 31.6 against 22.5 Mrays/s in `cargo xtask compare
-//! --scene ../shared/meshes/teapot.obj`.
+//! Single-threaded builds, one run of `cargo bench -p rt-benches --bench trace` (criterion
+//! medians): `sah` 348.5 ms on the bunny, 9.4× the SAH BVH's 37.0 ms (`wald-havran` 305.0 ms,
+//! 8.2×; the parallel `sah` build 206.8 ms on 2 threads); sphereflake 219.6 against 37.4 ms
+//! (5.9×; `wald-havran` 3.9×). `cargo xtask compare --scene ../shared/meshes/stanford-bunny.obj
+//! --threads 1` gives the same 9.4× (335.4 against 35.7 ms) and traces primary rays at 0.82× the
+//! BVH's speed (8.57 against 10.4 Mrays/s; `wald-havran` 8.62). On the teapot (6,320
+//! triangles) the kd-tree is the faster one: 29.6 against 24.5 Mrays/s in `cargo xtask compare
+//! --scene ../shared/meshes/teapot.obj`, with 0.650 tests per ray against 0.836.
 //!
 //! # Choosing the constants
-//! The ratio K_T / K_I sets the leaf size. `cargo run --release -p rt-kdtree --example
-//! cost_sweep` prints the trade-off on the bunny (512×384 primary rays; K_I = 20, λ = 0.8):
+//! The ratio K_T / K_I sets the leaf size, and the depth limit and the bad-refine allowance
+//! decide how far a path may go. `cargo run --release -p rt-kdtree --example cost_sweep` prints
+//! the trade-off on the bunny (1024×768 primary rays; K_I = 20, λ = 0.8; build single-threaded,
+//! best of 3, one run):
 //!
-//! | K_T | bad refines | nodes | refs/prim | visits/ray | tests/ray |
-//! | ---: | ---: | ---: | ---: | ---: | ---: |
-//! | 30 | 0 | 275,935 | 3.60 | 13.3 | 1.730 |
-//! | 15 | 0 | 612,253 | 5.23 | 14.2 | 1.038 |
-//! | 10 | 0 | 824,991 | 5.91 | 14.6 | 0.899 |
-//! | 5 | 0 | 1,022,251 | 6.76 | 14.9 | 0.753 |
-//! | 15 | 1 | 914,003 | 6.63 | 14.8 | 0.765 |
-//! | 10 | 1 | 1,185,367 | 7.54 | 15.2 | 0.695 |
+//! | configuration | nodes | depth | refs/prim | visits/ray | tests/ray | build ms |
+//! | --- | ---: | ---: | ---: | ---: | ---: | ---: |
+//! | Wald & Havran: K_T 15, depth `8 + 1.3 · log2 N` | 612,317 | 29 | 5.23 | 14.3 | 1.040 | 297 |
+//! | the same with K_T 5 | 1,022,311 | 29 | 6.76 | 15.0 | 0.756 | 375 |
+//! | the same with 1 bad refine | 914,059 | 29 | 6.63 | 14.9 | 0.768 | 365 |
+//! | K_T 25, 3 bad refines, depth `7 + 1.3 · log2 N` | 852,769 | 28 | 6.34 | 15.0 | 0.758 | 334 |
+//! | the same with `empty_cut` 0.25 (the default) | 822,567 | 28 | 6.09 | 15.1 | 0.764 | 299 |
 //!
-//! The SAH BVH needs 0.79 tests per ray on the same rays. A kd-tree gets below that with K_T ≤ 5
-//! or one tolerated non-improving split, at 1.5–1.7× the nodes of the default and about 1.2× its
-//! build time (414–427 against 345 ms in the same run of the example), which takes the build
-//! past 10× the BVH's. The default keeps Wald & Havran's constants; choose a smaller
-//! `traversal_cost` when a primitive test is expensive compared with a traversal step (curved
-//! or displaced primitives).
+//! With Wald & Havran's constants the tree needs 1.3× the BVH's primitive tests on these rays.
+//! A smaller traversal cost or a tolerated non-improving split gets below the BVH, at 1.5–1.7×
+//! the nodes and about 1.25× the build time. The default instead lets a path take up to three
+//! non-improving splits, which finds the splits that pay off two levels down, while a higher
+//! K_T and one level less of depth keep the tree from growing where they do not; cutting off
+//! wide empty slabs without pricing then pays for most of the extra build time. Both trees
+//! trace primary and incoherent rays at the same speed on this CPU, within this host's noise. Prefer
+//! [`KdParams::wald_havran`] for the smaller tree and faster build; lower `traversal_cost`
+//! further when a primitive test is expensive compared with a traversal step (curved or
+//! displaced primitives).
 //!
 //! # Example
 //! ```
@@ -150,8 +163,13 @@ pub struct KdParams {
     pub empty_bonus: f32,
     /// Clip straddling primitives to the child cells before computing their split candidates.
     pub perfect_splits: bool,
-    /// Depth limit; `None` is `8 + 1.3 · log2 N` (pbrt). Clamped to [`MAX_DEPTH`].
+    /// Cut off an empty slab at a face of the cell without pricing any split when the slab spans
+    /// at least this fraction of the cell's extent on its axis; `0` prices every split.
+    pub empty_cut: f32,
+    /// Depth limit; `None` is `depth_base + 1.3 · log2 N`, rounded. Clamped to [`MAX_DEPTH`].
     pub max_depth: Option<u32>,
+    /// The constant of the automatic depth limit (pbrt uses 8).
+    pub depth_base: f32,
     /// How many splits that do not lower the cost a path may take before a node becomes a leaf.
     pub max_bad_refines: u32,
     /// Nodes with at most this many primitives become leaves without pricing splits.
@@ -163,30 +181,50 @@ pub struct KdParams {
 }
 
 impl KdParams {
-    /// Wald & Havran (2006): K_T = 15, K_I = 20, λ = 0.8 for an empty side, perfect splits,
-    /// termination as soon as no split beats the leaf.
+    /// The default: Wald & Havran's cost model and perfect splits, with constants chosen for
+    /// few primitive tests at a bounded build time (see "Choosing the constants" in the crate
+    /// documentation): K_T = 25, K_I = 20, λ = 0.8 for an empty side, up to three splits that do
+    /// not lower the cost on a path, depth limit `7 + 1.3 · log2 N`, and empty slabs wider than a
+    /// quarter of the cell cut off without pricing.
     pub fn sah() -> Self {
         Self {
-            traversal_cost: 15.0,
+            traversal_cost: 25.0,
             intersection_cost: 20.0,
             empty_bonus: 0.2,
             perfect_splits: true,
+            empty_cut: 0.25,
             max_depth: None,
-            max_bad_refines: 0,
+            depth_base: 7.0,
+            max_bad_refines: 3,
             leaf_size: 0,
             parallel: true,
             traversal: Traversal::Stack,
         }
     }
 
+    /// Wald & Havran (2006) as published: K_T = 15, K_I = 20, λ = 0.8 for an empty side, perfect
+    /// splits, a leaf as soon as no split beats it, and pbrt's depth limit `8 + 1.3 · log2 N`.
+    pub fn wald_havran() -> Self {
+        Self {
+            traversal_cost: 15.0,
+            empty_cut: 0.0,
+            depth_base: 8.0,
+            max_bad_refines: 0,
+            ..Self::sah()
+        }
+    }
+
     /// pbrt-v3's `KdTreeAccel` defaults: K_I = 80, K_T = 1, empty bonus 0.5, one primitive per
-    /// leaf, up to two bad refines, candidates from bounding boxes (no perfect splits).
+    /// leaf, up to two bad refines, depth limit `8 + 1.3 · log2 N`, candidates from bounding boxes
+    /// (no perfect splits).
     pub fn pbrt() -> Self {
         Self {
             traversal_cost: 1.0,
             intersection_cost: 80.0,
             empty_bonus: 0.5,
             perfect_splits: false,
+            empty_cut: 0.0,
+            depth_base: 8.0,
             max_bad_refines: 2,
             leaf_size: 1,
             ..Self::sah()
@@ -211,7 +249,9 @@ impl KdParams {
 
     /// The depth limit for `n` primitives.
     pub fn resolved_max_depth(&self, n: usize) -> u32 {
-        let auto = (8.0 + 1.3 * (n.max(1) as f64).log2()).round() as u32;
+        let auto = (f64::from(self.depth_base) + 1.3 * (n.max(1) as f64).log2())
+            .round()
+            .max(0.0) as u32;
         self.max_depth.unwrap_or(auto).min(MAX_DEPTH as u32)
     }
 }
@@ -271,6 +311,7 @@ impl<P: Primitive> Accel for KdTree<P> {
     fn presets() -> Vec<(&'static str, KdParams)> {
         vec![
             ("sah", KdParams::sah()),
+            ("wald-havran", KdParams::wald_havran()),
             ("restart", KdParams::restart()),
             ("noclip", KdParams::noclip()),
             ("pbrt", KdParams::pbrt()),

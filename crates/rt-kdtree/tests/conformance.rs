@@ -5,6 +5,7 @@ use rt_core::{Accel, Sphere, Triangle};
 use rt_kdtree::{KdParams, KdTree, Traversal};
 
 rt_core::conformance_tests!(sah, KdTree<Triangle>, KdParams::sah());
+rt_core::conformance_tests!(wald_havran, KdTree<Triangle>, KdParams::wald_havran());
 rt_core::conformance_tests!(restart, KdTree<Triangle>, KdParams::restart());
 rt_core::conformance_tests!(noclip, KdTree<Triangle>, KdParams::noclip());
 rt_core::conformance_tests!(pbrt, KdTree<Triangle>, KdParams::pbrt());

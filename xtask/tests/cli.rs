@@ -122,7 +122,9 @@ fn default_scene_json_has_every_field_and_no_mismatch() {
             "kdtree-wald-havran",
             "kdtree-restart",
             "kdtree-noclip",
-            "kdtree-pbrt"
+            "kdtree-pbrt",
+            "grid",
+            "grid-nomailbox"
         ]
     );
     for r in rows {

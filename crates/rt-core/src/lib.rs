@@ -33,6 +33,7 @@ mod aabb;
 mod accel;
 mod brute;
 mod clip;
+pub mod leaf;
 mod mailbox;
 mod mesh;
 mod obj;

@@ -14,7 +14,7 @@
 //! found.
 
 use crate::{KdTree, MAX_DEPTH, Node};
-use rt_core::{Hit, Mailbox, Primitive, Ray, SLAB_FAR_SCALE, Stats};
+use rt_core::{Hit, Mailbox, Primitive, Ray, SLAB_FAR_SCALE, Stats, leaf};
 
 /// Mailbox slots per ray: the last this many primitives tested are not tested again.
 const MAILBOX: usize = 8;
@@ -87,30 +87,16 @@ impl<P: Primitive> KdTree<P> {
         stats: &mut S,
     ) -> bool {
         let first = node.index();
-        for &id in &self.refs[first..first + node.count()] {
-            if mailbox.check_and_insert(id) {
-                stats.mailbox_skip();
-                continue;
-            }
-            stats.prim_test();
-            let prim = &self.prims[id as usize];
-            if ANY {
-                if prim.occludes(ray, best.t) {
-                    best.prim = id;
-                    return true;
-                }
-            } else if let Some(h) = prim.intersect(ray, best.t)
-                && Hit::beats(h.t, id, best.t, best.prim)
-            {
-                *best = Hit {
-                    prim: id,
-                    t: h.t,
-                    u: h.u,
-                    v: h.v,
-                };
-            }
-        }
-        false
+        let ids = &self.refs[first..first + node.count()];
+        leaf::test_primitives::<P, S, ANY, MAILBOX>(
+            &self.prims,
+            ids,
+            ray,
+            best,
+            mailbox,
+            true,
+            stats,
+        )
     }
 
     /// The scene-box interval and the initial "no hit" record, or `None` if the ray misses.
@@ -120,25 +106,7 @@ impl<P: Primitive> KdTree<P> {
             return None;
         }
         let (t0, t1) = self.bounds.intersect(ray, ray.t_max)?;
-        let best = Hit {
-            prim: u32::MAX,
-            t: ray.t_max,
-            u: 0.0,
-            v: 0.0,
-        };
-        Some((t0, t1, best))
-    }
-
-    #[inline(always)]
-    fn finish<const ANY: bool>(best: Hit) -> Option<Hit> {
-        (best.prim != u32::MAX).then_some(if ANY {
-            Hit {
-                t: f32::NAN,
-                ..best
-            }
-        } else {
-            best
-        })
+        Some((t0, t1, leaf::no_hit(ray.t_max)))
     }
 
     /// Stack traversal. `ANY = false` finds the closest hit; `ANY = true` returns at the first.
@@ -150,7 +118,7 @@ impl<P: Primitive> KdTree<P> {
     ) -> Option<Hit> {
         let (t0, t1, mut best) = self.start(ray)?;
         self.stack_walk::<S, ANY>(ray, t0, t1, &mut best, stats);
-        Self::finish::<ANY>(best)
+        leaf::answer::<ANY>(best)
     }
 
     /// The stack walk from the root over `[t0, t1]`, updating `best`. Returns true on an any-hit.
@@ -264,7 +232,7 @@ impl<P: Primitive> KdTree<P> {
                     }
                     Step::Both { .. } | Step::InPlane { .. } => {
                         self.stack_walk::<S, ANY>(ray, t0, t_end, &mut best, stats);
-                        return Self::finish::<ANY>(best);
+                        return leaf::answer::<ANY>(best);
                     }
                 };
                 if !branched {
@@ -276,7 +244,7 @@ impl<P: Primitive> KdTree<P> {
                 || t1 >= t_end
                 || t1 > best.t * SLAB_FAR_SCALE
             {
-                return Self::finish::<ANY>(best);
+                return leaf::answer::<ANY>(best);
             }
             t0 = t1;
             exit_node = leaf_exit;

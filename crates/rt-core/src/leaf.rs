@@ -1,0 +1,73 @@
+//! What every structure does in a leaf or cell: test a list of primitives against the ray.
+//!
+//! Structures that reference a primitive from several cells (kd-trees, grids, octrees) share
+//! this loop, with a per-ray [`Mailbox`] to test each primitive once; the BVH, whose leaves own
+//! their primitives, needs no mailbox.
+
+use crate::{Hit, Mailbox, Primitive, Ray, Stats};
+
+/// The "no hit yet" record of a ray whose interval ends at `t_max`.
+#[inline(always)]
+pub fn no_hit(t_max: f32) -> Hit {
+    Hit {
+        prim: u32::MAX,
+        t: t_max,
+        u: 0.0,
+        v: 0.0,
+    }
+}
+
+/// Tests the primitives `ids` (indices into `prims`) against `[ray.t_min, best.t]`, keeping
+/// the closest hit in `best` (ties to the smaller index). With `ANY`, returns true at the first
+/// hit instead (its index in `best.prim`). With `use_mailbox`, primitives among the last `N`
+/// this ray tested are skipped and reported to `stats` as mailbox skips.
+#[inline(always)]
+pub fn test_primitives<P: Primitive, S: Stats, const ANY: bool, const N: usize>(
+    prims: &[P],
+    ids: &[u32],
+    ray: &Ray,
+    best: &mut Hit,
+    mailbox: &mut Mailbox<N>,
+    use_mailbox: bool,
+    stats: &mut S,
+) -> bool {
+    for &id in ids {
+        if use_mailbox && mailbox.check_and_insert(id) {
+            stats.mailbox_skip();
+            continue;
+        }
+        stats.prim_test();
+        let prim = &prims[id as usize];
+        if ANY {
+            if prim.occludes(ray, best.t) {
+                best.prim = id;
+                return true;
+            }
+        } else if let Some(h) = prim.intersect(ray, best.t)
+            && Hit::beats(h.t, id, best.t, best.prim)
+        {
+            *best = Hit {
+                prim: id,
+                t: h.t,
+                u: h.u,
+                v: h.v,
+            };
+        }
+    }
+    false
+}
+
+/// The answer a walk that kept `best` (starting from [`no_hit`]) returns: `None` if nothing was
+/// hit; for `ANY` queries the hit with `t` set to NaN, since the first hit found need not be the
+/// closest.
+#[inline(always)]
+pub fn answer<const ANY: bool>(best: Hit) -> Option<Hit> {
+    (best.prim != u32::MAX).then_some(if ANY {
+        Hit {
+            t: f32::NAN,
+            ..best
+        }
+    } else {
+        best
+    })
+}

@@ -1,0 +1,86 @@
+//! How the grid's density λ (cells per primitive) trades cells for primitive tests: cells,
+//! references per primitive, memory, build time, and visits, tests and mailbox skips per primary
+//! ray, with the speed of each.
+//!
+//! ```sh
+//! cargo run --release -p rt-grid --example density_sweep -- ../shared/meshes/stanford-bunny.obj
+//! cargo run --release -p rt-grid --example density_sweep -- random-soup
+//! ```
+//!
+//! The argument is an OBJ file or a built-in scene. The rays are 512×384 primary rays; builds
+//! and traces are single-threaded, and a time is the best of three, so compare times only within
+//! one run.
+
+use rt_core::raygen::Camera;
+use rt_core::{Accel, Counters};
+use rt_grid::{Grid, GridParams};
+use std::time::Instant;
+
+fn main() -> Result<(), Box<dyn std::error::Error>> {
+    let arg = std::env::args()
+        .nth(1)
+        .unwrap_or_else(|| "../shared/meshes/stanford-bunny.obj".into());
+    let mesh = match rt_core::scenes::builtin(&arg) {
+        Some(mesh) => mesh,
+        None => rt_core::load_obj(&arg)?,
+    };
+    let tris = mesh.triangles();
+    let rays = Camera::framing(&mesh.bounds(), 512, 384).primary_rays(512, 384);
+    println!(
+        "{arg}: {} triangles, {} primary rays",
+        tris.len(),
+        rays.len()
+    );
+    println!(
+        "{:>7} {:>9} {:>9} {:>7} {:>8} {:>10} {:>9} {:>10} {:>8}",
+        "density",
+        "cells",
+        "refs/prim",
+        "MiB",
+        "build ms",
+        "visits/ray",
+        "tests/ray",
+        "skips/ray",
+        "Mrays/s"
+    );
+    for density in [1.0, 2.0, 4.0, 8.0, 16.0, 32.0] {
+        let params = GridParams {
+            density,
+            parallel: false,
+            ..GridParams::standard()
+        };
+        let mut build_ms = f64::INFINITY;
+        let mut grid = None;
+        for _ in 0..3 {
+            let start = Instant::now();
+            let built = Grid::build(&tris, &params);
+            build_ms = build_ms.min(start.elapsed().as_secs_f64() * 1e3);
+            grid = Some(built);
+        }
+        let grid = grid.expect("built at least once");
+        let mut c = Counters::default();
+        for r in &rays {
+            grid.intersect_with(r, &mut c);
+        }
+        let mut trace_s = f64::INFINITY;
+        for _ in 0..3 {
+            let start = Instant::now();
+            let hits = rays.iter().filter(|r| grid.intersect(r).is_some()).count();
+            trace_s = trace_s.min(start.elapsed().as_secs_f64());
+            std::hint::black_box(hits);
+        }
+        let s = grid.build_stats();
+        let per_ray = |x: u64| x as f64 / rays.len() as f64;
+        println!(
+            "{density:>7} {:>9} {:>9.2} {:>7.1} {build_ms:>8.1} {:>10.1} {:>9.2} {:>10.2} {:>8.2}",
+            s.nodes,
+            s.duplication(),
+            grid.memory_bytes() as f64 / (1024.0 * 1024.0),
+            per_ray(c.node_visits),
+            per_ray(c.prim_tests),
+            per_ray(c.mailbox_skips),
+            rays.len() as f64 / trace_s / 1e6,
+        );
+    }
+    Ok(())
+}

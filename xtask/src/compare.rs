@@ -402,7 +402,11 @@ fn make_rays(
         let rays = raygen::read_rays_file(path).map_err(|e| e.to_string())?;
         return Ok((rays, "file", query));
     }
-    let camera = Camera::framing(bounds, args.width, args.height);
+    // A built-in scene may have its own viewpoint; anything else is framed whole.
+    let camera = match scenes::find(&args.scene) {
+        Some(scene) => scene.camera(bounds, args.width, args.height),
+        None => Camera::framing(bounds, args.width, args.height),
+    };
     Ok(match kind {
         RayKind::Primary => (
             camera.primary_rays(args.width, args.height),

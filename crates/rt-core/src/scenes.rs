@@ -1,5 +1,6 @@
 //! Procedural scenes built into the library, so that tests and `cargo xtask compare` need no files.
 
+use crate::raygen::Camera;
 use crate::{Mesh, Rng};
 use glam::Vec3;
 
@@ -11,6 +12,23 @@ pub struct BuiltinScene {
     /// What the scene is and why it is interesting.
     pub description: &'static str,
     make: fn() -> Mesh,
+    /// Where primary rays look from, when the scene has a subject to look at; `None` frames the
+    /// whole scene ([`Camera::framing`]).
+    pub camera: Option<Camera>,
+}
+
+impl BuiltinScene {
+    /// The scene's camera for a `width × height` image: its own viewpoint, or one framing
+    /// `bounds`.
+    pub fn camera(&self, bounds: &crate::Aabb, width: u32, height: u32) -> Camera {
+        self.camera
+            .unwrap_or_else(|| Camera::framing(bounds, width, height))
+    }
+}
+
+/// The built-in scene called `name`'s description, if there is one.
+pub fn find(name: &str) -> Option<&'static BuiltinScene> {
+    BUILTIN_SCENES.iter().find(|s| s.name == name)
 }
 
 /// Every built-in scene; the first is the default of `compare`.
@@ -19,20 +37,31 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
         name: "sphereflake",
         description: "Haines' sphereflake (820 tessellated spheres over four orders of size, 82k triangles) on a ground quad",
         make: || sphereflake(3, 6, 10),
+        camera: None,
     },
     BuiltinScene {
         name: "random-soup",
-        description: "20k random triangles of random size in a cube: no structure to exploit",
+        description: "20k random triangles of random size, uniformly spread in a cube: no structure to exploit",
         make: || random_soup(20_000, 7),
+        camera: None,
+    },
+    BuiltinScene {
+        name: "teapot-in-stadium",
+        description: "a 44k-triangle procedural teapot, 5 units wide, in the middle of a stadium 40 times its size (2.6k large triangles), seen from the stands",
+        make: teapot_in_stadium,
+        // A spectator's view: the teapot in the middle of the picture, the far stands behind.
+        camera: Some(Camera {
+            eye: Vec3::new(0.0, 9.0, 26.0),
+            target: Vec3::new(0.2, 1.0, 0.0),
+            up: Vec3::Y,
+            vfov_deg: 40.0,
+        }),
     },
 ];
 
 /// The built-in scene called `name`, if there is one.
 pub fn builtin(name: &str) -> Option<Mesh> {
-    BUILTIN_SCENES
-        .iter()
-        .find(|s| s.name == name)
-        .map(|s| (s.make)())
+    find(name).map(|s| (s.make)())
 }
 
 /// A UV sphere with `stacks` bands of latitude and `slices` of longitude
@@ -120,6 +149,185 @@ pub fn sphereflake(levels: u32, stacks: u32, slices: u32) -> Mesh {
     mesh
 }
 
+/// A surface of `along + 1` rings of `around` points, point `f(u, v)` for `u` in `[0, 1]` along
+/// the surface and `v` in `[0, 1)` around it, stitched into quads of two triangles; the rings
+/// close on themselves. `start` and `end` close the first and last ring with a fan to that point.
+fn swept(
+    along: u32,
+    around: u32,
+    f: impl Fn(f32, f32) -> Vec3,
+    start: Option<Vec3>,
+    end: Option<Vec3>,
+) -> Mesh {
+    let mut positions = Vec::new();
+    for i in 0..=along {
+        for j in 0..around {
+            positions.push(f(i as f32 / along as f32, j as f32 / around as f32));
+        }
+    }
+    let at = |i: u32, j: u32| i * around + j % around;
+    let mut indices = Vec::new();
+    for i in 0..along {
+        for j in 0..around {
+            let (a, b, c, d) = (at(i, j), at(i, j + 1), at(i + 1, j), at(i + 1, j + 1));
+            indices.push([a, c, d]);
+            indices.push([a, d, b]);
+        }
+    }
+    for (apex, ring, flip) in [(start, 0, true), (end, along, false)] {
+        if let Some(p) = apex {
+            let k = positions.len() as u32;
+            positions.push(p);
+            for j in 0..around {
+                let (a, b) = (at(ring, j), at(ring, j + 1));
+                indices.push(if flip { [k, b, a] } else { [k, a, b] });
+            }
+        }
+    }
+    Mesh::new(positions, indices).expect("swept indices are in range by construction")
+}
+
+/// The point at `u` in `[0, 1]` on the Catmull–Rom spline through `points` (at least two).
+fn spline(points: &[(f32, f32)], u: f32) -> (f32, f32) {
+    let n = points.len() - 1;
+    let x = (u.clamp(0.0, 1.0) * n as f32).min(n as f32 - 1e-6);
+    let i = x as usize;
+    let t = x - i as f32;
+    let p = |k: isize| points[k.clamp(0, n as isize) as usize];
+    let (p0, p1, p2, p3) = (
+        p(i as isize - 1),
+        p(i as isize),
+        p(i as isize + 1),
+        p(i as isize + 2),
+    );
+    let c = |a: f32, b: f32, c: f32, d: f32| {
+        0.5 * (2.0 * b
+            + (c - a) * t
+            + (2.0 * a - 5.0 * b + 4.0 * c - d) * t * t
+            + (3.0 * b - a - 3.0 * c + d) * t * t * t)
+    };
+    (c(p0.0, p1.0, p2.0, p3.0), c(p0.1, p1.1, p2.1, p3.1))
+}
+
+/// A tube of radius `radius(u)` around the curve `path(u)` in the plane z = 0, `u` in `[0, 1]`.
+fn tube(along: u32, around: u32, path: impl Fn(f32) -> Vec3, radius: impl Fn(f32) -> f32) -> Mesh {
+    swept(
+        along,
+        around,
+        |u, v| {
+            let du = 1e-3;
+            let tangent = (path((u + du).min(1.0)) - path((u - du).max(0.0))).normalize();
+            // The curve lies in z = 0: its normal in that plane, and the z axis, frame the ring.
+            let normal = Vec3::new(-tangent.y, tangent.x, 0.0);
+            let angle = std::f32::consts::TAU * v;
+            path(u) + radius(u) * (angle.cos() * normal + angle.sin() * Vec3::Z)
+        },
+        None,
+        None,
+    )
+}
+
+/// A procedural teapot, about 5 units wide and 2 tall, standing on y = `base`: body and lid as
+/// one surface of revolution (closed at both poles), a tapering spout and a handle as tubes;
+/// 44k triangles.
+pub fn teapot(base: f32) -> Mesh {
+    // (radius, height) from the bottom centre to the knob.
+    let profile = [
+        (0.9, 0.0),
+        (1.25, 0.12),
+        (1.45, 0.4),
+        (1.52, 0.75),
+        (1.42, 1.1),
+        (1.2, 1.38),
+        (1.02, 1.5),
+        (0.92, 1.58),
+        (0.62, 1.7),
+        (0.3, 1.77),
+        (0.13, 1.81),
+        (0.17, 1.9),
+        (0.14, 1.99),
+        (0.05, 2.03),
+    ];
+    let mut mesh = swept(
+        96,
+        192,
+        |u, v| {
+            let (r, y) = spline(&profile, u);
+            let a = std::f32::consts::TAU * v;
+            Vec3::new(r * a.cos(), base + y, r * a.sin())
+        },
+        Some(Vec3::new(0.0, base, 0.0)),
+        Some(Vec3::new(0.0, base + 2.05, 0.0)),
+    );
+    let spout = |u: f32| {
+        let (a, b, c) = (
+            Vec3::new(1.25, 0.55, 0.0),
+            Vec3::new(2.15, 0.6, 0.0),
+            Vec3::new(2.55, 1.45, 0.0),
+        );
+        let p = a * (1.0 - u) * (1.0 - u) + b * 2.0 * u * (1.0 - u) + c * u * u;
+        p + Vec3::Y * base
+    };
+    mesh.append(&tube(48, 48, spout, |u| 0.28 - 0.18 * u));
+    let handle = |u: f32| {
+        let a = std::f32::consts::PI * u;
+        Vec3::new(-1.4 - 0.65 * a.sin(), base + 0.85 + 0.5 * a.cos(), 0.0)
+    };
+    mesh.append(&tube(48, 24, handle, |_| 0.09));
+    mesh
+}
+
+/// Haines' "teapot in a stadium": [`teapot`] at the centre of a stadium 40 times its size, a
+/// ground square 240 units wide ringed by ten tiers of stands (seats and risers, 64 segments
+/// around, from radius 60 to 100 and up to 40 units high). A uniform grid fine enough for the
+/// stands puts the whole teapot into a few cells.
+pub fn teapot_in_stadium() -> Mesh {
+    stadium_with_teapot(true)
+}
+
+/// The stadium of [`teapot_in_stadium`], with or without its teapot.
+pub fn stadium_with_teapot(with_teapot: bool) -> Mesh {
+    let (inner, step, rise, tiers, segments) = (60.0, 4.0, 4.0, 10, 64);
+    let mut mesh = if with_teapot {
+        teapot(0.02)
+    } else {
+        Mesh::default()
+    };
+    let g = inner + step * tiers as f32 + 20.0;
+    mesh.append(
+        &Mesh::new(
+            vec![
+                Vec3::new(-g, 0.0, -g),
+                Vec3::new(g, 0.0, -g),
+                Vec3::new(g, 0.0, g),
+                Vec3::new(-g, 0.0, g),
+            ],
+            vec![[0, 2, 1], [0, 3, 2]],
+        )
+        .expect("ground indices are in range"),
+    );
+    for k in 0..tiers {
+        let (r, h) = (inner + step * k as f32, rise * k as f32);
+        let ring = |radius: f32, y: f32, v: f32| {
+            let a = std::f32::consts::TAU * v;
+            Vec3::new(radius * a.cos(), y, radius * a.sin())
+        };
+        // The riser at radius r from h to h + rise, then the seat from r to r + step at
+        // h + rise; each a band of one quad per segment.
+        let riser = swept(1, segments, |u, v| ring(r, h + rise * u, v), None, None);
+        let seat = swept(
+            1,
+            segments,
+            |u, v| ring(r + step * u, h + rise, v),
+            None,
+            None,
+        );
+        mesh.append(&riser);
+        mesh.append(&seat);
+    }
+    mesh
+}
+
 /// `count` random triangles with random orientation, edge lengths up to a tenth of the unit
 /// cube they fill.
 pub fn random_soup(count: usize, seed: u64) -> Mesh {
@@ -148,6 +356,7 @@ mod tests {
         for s in BUILTIN_SCENES {
             let m = builtin(s.name).unwrap();
             assert!(m.triangle_count() > 1000, "{}", s.name);
+            assert!(m.triangles().len() == m.triangle_count(), "{}", s.name);
             assert!(m.triangles().iter().all(|t| t.is_valid()), "{}", s.name);
         }
         assert!(builtin("nope").is_none());

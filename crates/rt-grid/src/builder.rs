@@ -40,7 +40,20 @@ pub(crate) fn test_box(shape: &GridShape, c: [u32; 3], margin: [f32; 3]) -> Aabb
     Aabb::new(b.min - m, b.max + m)
 }
 
-/// The cells primitive `prim` overlaps, appended to `out` as `(cell, prim)` pairs.
+/// The cells of `shape` that primitive `prim` (index `id`) is listed in: those of its bounding
+/// box whose box, widened by a few units in the last place of the grid's coordinates, it
+/// overlaps ([`Primitive::clip_bounds`]: exact for triangles). Appends `(cell index, id)` pairs
+/// to `out`. Hierarchical grids insert into their nested grids with the same rule.
+pub fn cells_overlapping<P: Primitive>(
+    shape: &GridShape,
+    prim: &P,
+    id: u32,
+    out: &mut Vec<(u32, u32)>,
+) {
+    cells_of(shape, margin(shape), prim, id, out);
+}
+
+/// [`cells_overlapping`] with the margin computed once by the caller.
 pub(crate) fn cells_of<P: Primitive>(
     shape: &GridShape,
     margin: [f32; 3],

@@ -80,9 +80,11 @@
 
 mod builder;
 mod cell;
+pub mod dda;
 mod traverse;
 mod validate;
 
+pub use builder::cells_overlapping;
 pub use cell::{GridShape, MAX_RESOLUTION};
 pub use validate::ValidationError;
 

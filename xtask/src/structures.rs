@@ -8,6 +8,7 @@ use rayon::prelude::*;
 use rt_bvh::Bvh;
 use rt_core::{Accel, BruteForce, BuildStats, Counters, Hit, Ray, Triangle};
 use rt_grid::Grid;
+use rt_hgrid::HGrid;
 use rt_kdtree::KdTree;
 
 /// Which query a run makes.
@@ -128,6 +129,7 @@ pub fn all() -> Vec<Entry> {
     let mut all = entries_of::<Bvh<Triangle>>();
     all.extend(entries_of::<KdTree<Triangle>>());
     all.extend(entries_of::<Grid<Triangle>>());
+    all.extend(entries_of::<HGrid<Triangle>>());
     all
 }
 

@@ -124,7 +124,9 @@ fn default_scene_json_has_every_field_and_no_mismatch() {
             "kdtree-noclip",
             "kdtree-pbrt",
             "grid",
-            "grid-nomailbox"
+            "grid-nomailbox",
+            "hgrid",
+            "hgrid-lean"
         ]
     );
     for r in rows {

@@ -170,6 +170,7 @@ pub const SCENES: &[&str] = &[
     "planar_triangles",
     "spanning_triangles",
     "invalid_rays",
+    "lattice",
 ];
 
 /// The adversarial scene called `name` (one of [`SCENES`]).
@@ -196,6 +197,10 @@ pub fn scene(name: &str) -> Scene {
         "spanning_triangles" => spanning_triangles(),
         "invalid_rays" => invalid_rays(),
         "exponential_chain" => exponential_chain(),
+        "lattice" => Scene {
+            triangles: lattice_triangles(1, 60),
+            rays: lattice_rays(1, 800),
+        },
         _ => panic!("unknown conformance scene `{name}`; see rt_core::conformance::SCENES"),
     }
 }
@@ -348,7 +353,7 @@ macro_rules! conformance_tests {
                 empty_scene one_triangle shared_edge identical_triangles equal_centroids
                 zero_area_triangles axis_parallel_rays rays_in_box_faces origins_inside
                 large_coordinates nan_vertex exponential_chain planar_triangles
-                spanning_triangles invalid_rays);
+                spanning_triangles invalid_rays lattice);
             #[test]
             fn random_scenes() {
                 $crate::conformance::check_random::<$accel>(&params());
@@ -817,6 +822,112 @@ fn invalid_rays() -> Scene {
         Ray::with_interval(Vec3::splat(-2.0), Vec3::ONE, -inf, inf),
     ];
     Scene { triangles, rays }
+}
+
+/// `count` triangles with vertices on the half-integer lattice of the cube `[0, 4]³`; the first
+/// two pin the scene's box to the whole cube. A third lie in an axis plane through a lattice
+/// point. On a grid (or kd-tree) whose planes are the integers or half-integers, they lie in cell
+/// planes, touch cells at a vertex or an edge, and span many cells.
+pub fn lattice_triangles(seed: u64, count: usize) -> Vec<Triangle> {
+    let mut rng = Rng::new(seed);
+    let mut tris = vec![
+        Triangle::new(
+            Vec3::ZERO,
+            Vec3::new(0.5, 0.0, 0.0),
+            Vec3::new(0.0, 0.5, 0.0),
+        ),
+        Triangle::new(
+            Vec3::splat(4.0),
+            Vec3::new(3.5, 4.0, 4.0),
+            Vec3::new(4.0, 3.5, 4.0),
+        ),
+    ];
+    let point = |rng: &mut Rng| {
+        Vec3::new(
+            (rng.f32() * 9.0).floor() * 0.5,
+            (rng.f32() * 9.0).floor() * 0.5,
+            (rng.f32() * 9.0).floor() * 0.5,
+        )
+    };
+    while tris.len() < count {
+        let a = point(&mut rng);
+        let mut b = point(&mut rng);
+        let mut c = point(&mut rng);
+        if rng.f32() < 0.33 {
+            let axis = (rng.f32() * 3.0) as usize % 3;
+            b[axis] = a[axis];
+            c[axis] = a[axis];
+        }
+        let t = Triangle::new(a, b, c);
+        if t.normal() != Vec3::ZERO {
+            tris.push(t);
+        }
+    }
+    tris.truncate(count.max(2));
+    tris
+}
+
+/// `count` rays from integer lattice points of `[-1, 5]³` (inside the cube of
+/// [`lattice_triangles`], on its faces, edges and corners, and outside) along directions with
+/// components in {-2, -1, -0, +0, 1, 2}: they run along lattice planes and pass exactly through
+/// lattice edges and corners.
+pub fn lattice_rays(seed: u64, count: usize) -> Vec<Ray> {
+    let mut rng = Rng::new(seed ^ 0xdda);
+    let component =
+        |rng: &mut Rng| [-2.0, -1.0, -0.0, 0.0, 1.0, 2.0][(rng.f32() * 6.0) as usize % 6];
+    let mut rays = Vec::with_capacity(count);
+    while rays.len() < count {
+        let o = Vec3::new(
+            (rng.f32() * 7.0).floor() - 1.0,
+            (rng.f32() * 7.0).floor() - 1.0,
+            (rng.f32() * 7.0).floor() - 1.0,
+        );
+        let d = Vec3::new(
+            component(&mut rng),
+            component(&mut rng),
+            component(&mut rng),
+        );
+        if d.abs() != Vec3::ZERO {
+            rays.push(Ray::new(o, d));
+        }
+    }
+    rays
+}
+
+/// One case of tiny triangles hugging a lattice edge: the two pinning triangles of
+/// [`lattice_triangles`], then four triangles of size up to 10⁻³, one in each quadrant around the
+/// edge x = i, y = j (integers 1..=3) at distances down to 10⁻⁷, and 200 rays at them from up to
+/// 10⁴ away. Rounding moves such a ray's computed path across the edge by more than the
+/// triangles' distance to it: a structure with cells there must look on both sides.
+pub fn edge_grazing_case(rng: &mut Rng) -> (Vec<Triangle>, Vec<Ray>) {
+    let mut tris = lattice_triangles(0, 2);
+    let (i, j) = (
+        (1 + (rng.f32() * 3.0) as u32) as f32,
+        (1 + (rng.f32() * 3.0) as u32) as f32,
+    );
+    let eps = 10f32.powf(-3.0 - rng.f32() * 4.0);
+    for (sx, sy) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)] {
+        let c = Vec3::new(i + sx * eps, j + sy * eps, 2.0 + rng.f32());
+        let s = eps * 0.5;
+        tris.push(Triangle::new(
+            c + Vec3::new(-s, -s, 0.0),
+            c + Vec3::new(s, -s, 0.0),
+            c + Vec3::new(0.0, s, 0.01),
+        ));
+    }
+    let rays = (0..200)
+        .map(|_| {
+            let target = Vec3::new(
+                i + (rng.f32() - 0.5) * eps * 4.0,
+                j + (rng.f32() - 0.5) * eps * 4.0,
+                2.0 + rng.f32(),
+            );
+            let dist = 10f32.powf(rng.f32() * 4.0);
+            let dir = rng.unit_vector();
+            Ray::new(target - dir * dist, dir)
+        })
+        .collect();
+    (tris, rays)
 }
 
 fn exponential_chain() -> Scene {

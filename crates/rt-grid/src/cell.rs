@@ -119,6 +119,17 @@ impl GridShape {
         Aabb::new(min.into(), max.into())
     }
 
+    /// The cell with linear index `i` (the inverse of [`index`](Self::index)).
+    #[inline]
+    pub fn coords(&self, i: usize) -> [u32; 3] {
+        let (nx, ny) = (self.res[0] as usize, self.res[1] as usize);
+        [
+            (i % nx) as u32,
+            (i / nx % ny) as u32,
+            (i / (nx * ny)) as u32,
+        ]
+    }
+
     /// The linear index of cell `c` (x fastest).
     #[inline(always)]
     pub fn index(&self, c: [u32; 3]) -> usize {
@@ -169,5 +180,8 @@ mod tests {
             assert_eq!(g.cell_of(a, f32::NAN), 0);
         }
         assert_eq!(g.index([2, 3, 4]), g.cell_count() - 1);
+        for i in 0..g.cell_count() {
+            assert_eq!(g.index(g.coords(i)), i);
+        }
     }
 }

@@ -6,78 +6,12 @@
 //! (hits beyond the current cell).
 
 use proptest::prelude::*;
-use rt_core::conformance::check_case;
+use rt_core::conformance::{
+    check_case, edge_grazing_case, lattice_rays, lattice_triangles as lattice_scene,
+};
 use rt_core::glam::Vec3;
 use rt_core::{Accel, BruteForce, Rng, Triangle};
 use rt_grid::{Grid, GridParams};
-
-/// Triangles in `[0, 4]³` on the half-integer lattice; the first two pin the box to the full
-/// cube.
-fn lattice_scene(seed: u64, count: usize) -> Vec<Triangle> {
-    let mut rng = Rng::new(seed);
-    let mut tris = vec![
-        Triangle::new(
-            Vec3::ZERO,
-            Vec3::new(0.5, 0.0, 0.0),
-            Vec3::new(0.0, 0.5, 0.0),
-        ),
-        Triangle::new(
-            Vec3::splat(4.0),
-            Vec3::new(3.5, 4.0, 4.0),
-            Vec3::new(4.0, 3.5, 4.0),
-        ),
-    ];
-    let point = |rng: &mut Rng| {
-        Vec3::new(
-            (rng.f32() * 9.0).floor() * 0.5,
-            (rng.f32() * 9.0).floor() * 0.5,
-            (rng.f32() * 9.0).floor() * 0.5,
-        )
-    };
-    while tris.len() < count {
-        let a = point(&mut rng);
-        let mut b = point(&mut rng);
-        let mut c = point(&mut rng);
-        // A third of the triangles lie in an axis plane through `a` (often a cell plane).
-        if rng.f32() < 0.33 {
-            let axis = (rng.f32() * 3.0) as usize % 3;
-            b[axis] = a[axis];
-            c[axis] = a[axis];
-        }
-        let t = Triangle::new(a, b, c);
-        if t.normal() != Vec3::ZERO {
-            tris.push(t);
-        }
-    }
-    tris
-}
-
-fn component(rng: &mut Rng) -> f32 {
-    [-2.0, -1.0, -0.0, 0.0, 1.0, 2.0][(rng.f32() * 6.0) as usize % 6]
-}
-
-/// Rays from lattice points in `[-1, 5]³` (some on the grid's faces) along small integer
-/// directions.
-fn lattice_rays(seed: u64, count: usize) -> Vec<rt_core::Ray> {
-    let mut rng = Rng::new(seed ^ 0xdda);
-    let mut rays = Vec::with_capacity(count);
-    while rays.len() < count {
-        let o = Vec3::new(
-            (rng.f32() * 7.0).floor() - 1.0,
-            (rng.f32() * 7.0).floor() - 1.0,
-            (rng.f32() * 7.0).floor() - 1.0,
-        );
-        let d = Vec3::new(
-            component(&mut rng),
-            component(&mut rng),
-            component(&mut rng),
-        );
-        if d.abs() != Vec3::ZERO {
-            rays.push(rt_core::Ray::new(o, d));
-        }
-    }
-    rays
-}
 
 /// λ such that a scene of `n` triangles in the cube `[0, 4]³` gets 4 × 4 × 4 cells.
 fn unit_cells(n: usize) -> GridParams {
@@ -154,41 +88,14 @@ proptest! {
 }
 
 /// Tiny triangles hugging a cell edge, one in each of the four cells around it, hit by rays
-/// from up to 10⁴ away. Rounding moves such a ray's computed path across the edge by more than
-/// the triangles' distance to it, so the DDA must also test the cells beside its path where two
-/// boundaries are crossed within rounding of each other. (Without that, 10 of these 3,000 scenes
-/// fail.)
+/// from up to 10⁴ away ([`edge_grazing_case`]): the DDA must also test the cells beside its path
+/// where two boundaries are crossed within rounding of each other. (Without that, 10 of these
+/// 3,000 scenes fail.)
 #[test]
 fn rays_grazing_cell_edges_from_afar_agree_with_brute_force() {
     let mut rng = Rng::new(5);
     for _ in 0..3000 {
-        let mut tris = lattice_scene(0, 2);
-        let (i, j) = (
-            (1 + (rng.f32() * 3.0) as u32) as f32,
-            (1 + (rng.f32() * 3.0) as u32) as f32,
-        );
-        let eps = 10f32.powf(-3.0 - rng.f32() * 4.0);
-        for (sx, sy) in [(1.0, 1.0), (-1.0, 1.0), (1.0, -1.0), (-1.0, -1.0)] {
-            let c = Vec3::new(i + sx * eps, j + sy * eps, 2.0 + rng.f32());
-            let s = eps * 0.5;
-            tris.push(Triangle::new(
-                c + Vec3::new(-s, -s, 0.0),
-                c + Vec3::new(s, -s, 0.0),
-                c + Vec3::new(0.0, s, 0.01),
-            ));
-        }
-        let rays: Vec<_> = (0..200)
-            .map(|_| {
-                let target = Vec3::new(
-                    i + (rng.f32() - 0.5) * eps * 4.0,
-                    j + (rng.f32() - 0.5) * eps * 4.0,
-                    2.0 + rng.f32(),
-                );
-                let dist = 10f32.powf(rng.f32() * 4.0);
-                let dir = rng.unit_vector();
-                rt_core::Ray::new(target - dir * dist, dir)
-            })
-            .collect();
+        let (tris, rays) = edge_grazing_case(&mut rng);
         check_case::<Grid<Triangle>>(&unit_cells(tris.len()), &tris, &rays).unwrap();
     }
 }

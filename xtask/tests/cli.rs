@@ -125,6 +125,7 @@ fn default_scene_json_has_every_field_and_no_mismatch() {
             "kdtree-pbrt",
             "grid",
             "grid-nomailbox",
+            "grid-bbox",
             "hgrid",
             "hgrid-lean"
         ]

@@ -50,7 +50,7 @@ pub fn cells_overlapping<P: Primitive>(
     id: u32,
     out: &mut Vec<(u32, u32)>,
 ) {
-    cells_of(shape, margin(shape), prim, id, out);
+    cells_of(shape, margin(shape), prim, id, true, out);
 }
 
 /// [`cells_overlapping`] with the margin computed once by the caller.
@@ -59,13 +59,15 @@ pub(crate) fn cells_of<P: Primitive>(
     margin: [f32; 3],
     prim: &P,
     id: u32,
+    exact: bool,
     out: &mut Vec<(u32, u32)>,
 ) {
     let b = prim.bounds();
     let lo: [u32; 3] = std::array::from_fn(|a| shape.cell_of(a, b.min[a] - margin[a]));
     let hi: [u32; 3] = std::array::from_fn(|a| shape.cell_of(a, b.max[a] + margin[a]));
-    // A primitive whose box lies in one cell overlaps that cell: no test needed.
-    let single = lo == hi;
+    // A primitive whose box lies in one cell overlaps that cell: no test needed. Without
+    // `exact`, every cell of the box gets the primitive.
+    let single = lo == hi || !exact;
     for z in lo[2]..=hi[2] {
         for y in lo[1]..=hi[1] {
             for x in lo[0]..=hi[0] {
@@ -99,10 +101,11 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &GridParams) -> Built {
     let res = GridShape::resolution(&bounds, ids.len(), params.density, params.max_cells);
     let shape = GridShape::new(bounds, res);
     let margin = margin(&shape);
+    let exact = params.exact_insertion;
     let pairs_of = |chunk: &[u32]| {
         let mut out = Vec::with_capacity(chunk.len() * 2);
         for &id in chunk {
-            cells_of(&shape, margin, &prims[id as usize], id, &mut out);
+            cells_of(&shape, margin, &prims[id as usize], id, exact, &mut out);
         }
         out
     };

@@ -63,7 +63,7 @@ impl<P: Primitive> Grid<P> {
                 continue;
             }
             cells.clear();
-            crate::builder::cells_of(&self.shape, m, p, id as u32, &mut cells);
+            crate::builder::cells_of(&self.shape, m, p, id as u32, self.exact, &mut cells);
             if cells.is_empty() || cells.len() != listed[id] {
                 return err(format!(
                     "primitive {id}: listed in {} cells, overlaps {}",

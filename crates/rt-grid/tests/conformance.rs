@@ -6,6 +6,7 @@ use rt_grid::{Grid, GridParams};
 
 rt_core::conformance_tests!(standard, Grid<Triangle>, GridParams::standard());
 rt_core::conformance_tests!(no_mailbox, Grid<Triangle>, GridParams::no_mailbox());
+rt_core::conformance_tests!(bbox, Grid<Triangle>, GridParams::bbox_insertion());
 rt_core::conformance_tests!(
     coarse,
     Grid<Triangle>,

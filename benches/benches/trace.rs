@@ -1,11 +1,13 @@
-//! Build and primary-ray trace times of rt-bvh and rt-kdtree against the `obvhs` and `bvh`
-//! crates, on the same triangles and the same rays, single-threaded. Run with `cargo bench -p rt-benches --bench trace`.
+//! Build and primary-ray trace times of rt-bvh, rt-kdtree, rt-grid and rt-hgrid against the
+//! `obvhs` and `bvh` crates, on the same triangles and the same rays, single-threaded. Run with `cargo bench -p rt-benches --bench trace`.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rt_benches::{BenchScene, scenes};
 use rt_bvh::{Bvh, BvhParams};
 use rt_core::glam::Vec3A;
 use rt_core::{Accel, MtTriangle, Ray, Triangle};
+use rt_grid::{Grid, GridParams};
+use rt_hgrid::{HGrid, HGridParams};
 use rt_kdtree::{KdParams, KdTree};
 use std::hint::black_box;
 use std::time::Duration;
@@ -95,6 +97,20 @@ fn bench_build(c: &mut Criterion, scene: &BenchScene) {
     g.bench_function(BenchmarkId::new("rt-kdtree", "sah-parallel"), |b| {
         b.iter(|| KdTree::build(black_box(&scene.triangles), &KdParams::sah()));
     });
+    let grid = GridParams {
+        parallel: false,
+        ..GridParams::standard()
+    };
+    g.bench_function(BenchmarkId::new("rt-grid", "standard"), |b| {
+        b.iter(|| Grid::build(black_box(&scene.triangles), &grid));
+    });
+    let hgrid = HGridParams {
+        parallel: false,
+        ..HGridParams::standard()
+    };
+    g.bench_function(BenchmarkId::new("rt-hgrid", "standard"), |b| {
+        b.iter(|| HGrid::build(black_box(&scene.triangles), &hgrid));
+    });
     let otris = to_obvhs(&scene.triangles);
     g.bench_function(BenchmarkId::new("obvhs", "medium"), |b| {
         b.iter(|| obvhs_build(black_box(&otris), obvhs::BvhBuildParams::medium_build()));
@@ -133,6 +149,16 @@ fn bench_trace(c: &mut Criterion, scene: &BenchScene) {
         assert_eq!(count_hits(&kd, &rays), expected, "{label}");
         g.bench_function(label, |b| b.iter(|| count_hits(black_box(&kd), &rays)));
     }
+    let grid = Grid::build(&scene.triangles, &GridParams::standard());
+    assert_eq!(count_hits(&grid, &rays), expected, "rt-grid");
+    g.bench_function("rt-grid", |b| {
+        b.iter(|| count_hits(black_box(&grid), &rays))
+    });
+    let hgrid = HGrid::build(&scene.triangles, &HGridParams::standard());
+    assert_eq!(count_hits(&hgrid, &rays), expected, "rt-hgrid");
+    g.bench_function("rt-hgrid", |b| {
+        b.iter(|| count_hits(black_box(&hgrid), &rays))
+    });
     let mt: Vec<MtTriangle> = scene.triangles.iter().copied().map(MtTriangle).collect();
     let bvh_mt = Bvh::build(&mt, &BvhParams::sah());
     g.bench_function("rt-bvh/moller-trumbore", |b| {

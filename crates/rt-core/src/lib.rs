@@ -56,7 +56,7 @@ pub use clip::{clip_triangle_bounds, split_triangle_bounds};
 pub use mailbox::Mailbox;
 pub use mesh::{IndexOutOfRange, Mesh};
 pub use obj::{LoadError, LoadErrorKind, load_obj, load_obj_bytes};
-pub use primitive::{PrimHit, Primitive};
+pub use primitive::{PrimHit, Primitive, valid_primitives};
 pub use ray::Ray;
 pub use rng::Rng;
 pub use sphere::Sphere;

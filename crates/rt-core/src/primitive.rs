@@ -80,3 +80,17 @@ pub trait Primitive: Clone + Send + Sync + Debug + 'static {
         self.intersect(ray, t_max).is_some()
     }
 }
+
+/// The indices of the valid primitives (see [`Primitive::is_valid`]) among the first 2³² - 1 of
+/// `prims`, in increasing order, and the union of their bounds ([`Aabb::EMPTY`] if none): what
+/// every builder starts from.
+pub fn valid_primitives<P: Primitive>(prims: &[P]) -> (Vec<u32>, crate::Aabb) {
+    let ids: Vec<u32> = (0..prims.len().min(u32::MAX as usize))
+        .filter(|&i| prims[i].is_valid())
+        .map(|i| i as u32)
+        .collect();
+    let bounds = ids.iter().fold(crate::Aabb::EMPTY, |b, &i| {
+        b.union(prims[i as usize].bounds())
+    });
+    (ids, bounds)
+}

@@ -81,13 +81,7 @@ pub(crate) fn cells_of<P: Primitive>(
 }
 
 pub(crate) fn build<P: Primitive>(prims: &[P], params: &GridParams) -> Built {
-    let ids: Vec<u32> = (0..prims.len().min(u32::MAX as usize))
-        .filter(|&i| prims[i].is_valid())
-        .map(|i| i as u32)
-        .collect();
-    let bounds = ids
-        .iter()
-        .fold(Aabb::EMPTY, |b, &i| b.union(prims[i as usize].bounds()));
+    let (ids, bounds) = rt_core::valid_primitives(prims);
     if ids.is_empty() {
         let zero = rt_core::glam::Vec3::ZERO;
         let shape = GridShape::new(Aabb::new(zero, zero), [1; 3]);

@@ -42,13 +42,7 @@ struct Ctx<'a, P> {
 }
 
 pub(crate) fn build<P: Primitive>(prims: &[P], params: &HGridParams) -> Built {
-    let ids: Vec<u32> = (0..prims.len().min(u32::MAX as usize))
-        .filter(|&i| prims[i].is_valid())
-        .map(|i| i as u32)
-        .collect();
-    let bounds = ids
-        .iter()
-        .fold(Aabb::EMPTY, |b, &i| b.union(prims[i as usize].bounds()));
+    let (ids, bounds) = rt_core::valid_primitives(prims);
     let mut out = Built {
         valid_prims: ids.len(),
         ..Built::default()

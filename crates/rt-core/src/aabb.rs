@@ -13,6 +13,16 @@ use glam::Vec3;
 /// The margin costs a negligible number of extra box visits.
 pub const SLAB_FAR_SCALE: f32 = 1.0 + 1.0 / 65536.0;
 
+/// Two plane crossings whose ray parameters lie within this factor of each other (`1 + 2⁻²⁰`,
+/// sixteen units in the last place) count as simultaneous: spatial subdivisions (grids, octrees)
+/// then also visit the cells beside their computed path, since rounding may have put the true
+/// path through them. It is several times the error of a crossing's computed `t` (about 1.5 ulp:
+/// one subtraction and one multiplication by the reciprocal direction), and well below
+/// [`SLAB_FAR_SCALE`], so a walk that stops at a cell starting beyond `best.t · SLAB_FAR_SCALE`
+/// never stops before such a side cell. (A test of tiny triangles hugging cell edges, hit from
+/// 10⁴ away, fails without the side cells.)
+pub const NEAR_TIE: f32 = 1.0 + 1.0 / 1_048_576.0;
+
 /// An axis-aligned box `[min, max]`. The empty box has `min = +inf`, `max = -inf`.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]

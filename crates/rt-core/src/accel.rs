@@ -139,3 +139,17 @@ pub trait Accel: Sized + Send + Sync {
     /// The structure's shape.
     fn build_stats(&self) -> BuildStats;
 }
+
+/// A broken structural invariant, described in one sentence: what a structure's `validate`
+/// method returns (`rt-grid`, `rt-hgrid` and `rt-octree` use this type) when its tree or cells
+/// do not match what the builder's rules say.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ValidationError(pub String);
+
+impl std::fmt::Display for ValidationError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for ValidationError {}

@@ -49,8 +49,8 @@ mod triangle;
 #[cfg(feature = "conformance")]
 pub mod conformance;
 
-pub use aabb::{Aabb, SLAB_FAR_SCALE};
-pub use accel::{Accel, BuildStats, Hit};
+pub use aabb::{Aabb, NEAR_TIE, SLAB_FAR_SCALE};
+pub use accel::{Accel, BuildStats, Hit, ValidationError};
 pub use brute::BruteForce;
 pub use clip::{clip_triangle_bounds, split_triangle_bounds};
 pub use mailbox::Mailbox;

@@ -10,10 +10,8 @@ use crate::cell::GridShape;
 use rt_core::Ray;
 
 /// Two boundaries crossed within this factor of each other count as crossed together, and the
-/// cells beside the path there are tested too: sixteen units in the last place, several times
-/// the rounding error of a boundary's `t`. (A test of tiny triangles hugging cell edges, hit
-/// from 10⁴ away, fails without the side cells.)
-pub const NEAR_TIE: f32 = 1.0 + 1.0 / 1_048_576.0;
+/// cells beside the path there are tested too (shared with the octree; see its definition).
+pub use rt_core::NEAR_TIE;
 
 /// The ray's components as arrays, so an axis index does not branch.
 #[derive(Clone, Copy, Debug)]

@@ -96,7 +96,7 @@ mod validate;
 
 pub use builder::cells_overlapping;
 pub use cell::{GridShape, MAX_RESOLUTION};
-pub use validate::ValidationError;
+pub use rt_core::ValidationError;
 
 use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, Stats};
 

@@ -2,20 +2,7 @@
 
 use crate::Grid;
 use crate::builder::margin;
-use rt_core::Primitive;
-use std::fmt;
-
-/// The first broken invariant [`Grid::validate`] found.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ValidationError(pub String);
-
-impl fmt::Display for ValidationError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for ValidationError {}
+use rt_core::{Primitive, ValidationError};
 
 impl<P: Primitive> Grid<P> {
     /// Checks the grid: offsets that start at 0, never decrease and end at the reference count;

@@ -80,7 +80,7 @@ mod validate;
 
 pub use builder::MAX_LEVELS;
 pub use node::{Cell, Level};
-pub use validate::ValidationError;
+pub use rt_core::ValidationError;
 
 use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, Stats};
 

@@ -2,21 +2,8 @@
 
 use crate::HGrid;
 use crate::builder::MAX_LEVELS;
-use rt_core::Primitive;
+use rt_core::{Primitive, ValidationError};
 use rt_grid::cells_overlapping;
-use std::fmt;
-
-/// The first broken invariant [`HGrid::validate`] found.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ValidationError(pub String);
-
-impl fmt::Display for ValidationError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        f.write_str(&self.0)
-    }
-}
-
-impl std::error::Error for ValidationError {}
 
 impl<P: Primitive> HGrid<P> {
     /// Checks the hierarchy: every grid's cells in range and each nested grid referenced by

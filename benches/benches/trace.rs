@@ -1,4 +1,4 @@
-//! Build and primary-ray trace times of rt-bvh, rt-kdtree, rt-grid and rt-hgrid against the
+//! Build and primary-ray trace times of rt-bvh, rt-kdtree, rt-grid, rt-hgrid and rt-octree against the
 //! `obvhs` and `bvh` crates, on the same triangles and the same rays, single-threaded. Run with `cargo bench -p rt-benches --bench trace`.
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
@@ -9,6 +9,7 @@ use rt_core::{Accel, MtTriangle, Ray, Triangle};
 use rt_grid::{Grid, GridParams};
 use rt_hgrid::{HGrid, HGridParams};
 use rt_kdtree::{KdParams, KdTree};
+use rt_octree::{Octree, OctreeParams};
 use std::hint::black_box;
 use std::time::Duration;
 
@@ -111,6 +112,20 @@ fn bench_build(c: &mut Criterion, scene: &BenchScene) {
     g.bench_function(BenchmarkId::new("rt-hgrid", "standard"), |b| {
         b.iter(|| HGrid::build(black_box(&scene.triangles), &hgrid));
     });
+    for parallel in [false, true] {
+        let octree = OctreeParams {
+            parallel,
+            ..OctreeParams::standard()
+        };
+        let label = if parallel {
+            "standard-parallel"
+        } else {
+            "standard"
+        };
+        g.bench_function(BenchmarkId::new("rt-octree", label), |b| {
+            b.iter(|| Octree::build(black_box(&scene.triangles), &octree));
+        });
+    }
     let otris = to_obvhs(&scene.triangles);
     g.bench_function(BenchmarkId::new("obvhs", "medium"), |b| {
         b.iter(|| obvhs_build(black_box(&otris), obvhs::BvhBuildParams::medium_build()));
@@ -158,6 +173,11 @@ fn bench_trace(c: &mut Criterion, scene: &BenchScene) {
     assert_eq!(count_hits(&hgrid, &rays), expected, "rt-hgrid");
     g.bench_function("rt-hgrid", |b| {
         b.iter(|| count_hits(black_box(&hgrid), &rays))
+    });
+    let octree = Octree::build(&scene.triangles, &OctreeParams::standard());
+    assert_eq!(count_hits(&octree, &rays), expected, "rt-octree");
+    g.bench_function("rt-octree", |b| {
+        b.iter(|| count_hits(black_box(&octree), &rays))
     });
     let mt: Vec<MtTriangle> = scene.triangles.iter().copied().map(MtTriangle).collect();
     let bvh_mt = Bvh::build(&mt, &BvhParams::sah());

@@ -10,6 +10,7 @@ use rt_core::{Accel, BruteForce, BuildStats, Counters, Hit, Ray, Triangle};
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
 use rt_kdtree::KdTree;
+use rt_octree::Octree;
 
 /// Which query a run makes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -130,6 +131,7 @@ pub fn all() -> Vec<Entry> {
     all.extend(entries_of::<KdTree<Triangle>>());
     all.extend(entries_of::<Grid<Triangle>>());
     all.extend(entries_of::<HGrid<Triangle>>());
+    all.extend(entries_of::<Octree<Triangle>>());
     all
 }
 

@@ -127,7 +127,9 @@ fn default_scene_json_has_every_field_and_no_mismatch() {
             "grid-nomailbox",
             "grid-bbox",
             "hgrid",
-            "hgrid-lean"
+            "hgrid-lean",
+            "octree",
+            "octree-lean"
         ]
     );
     for r in rows {
@@ -250,7 +252,57 @@ fn meshes_all_ray_kinds_agree_and_sah_beats_median() {
                     tests("bvh"),
                     tests("bvh-median")
                 );
+                // Issue 5's target: the octree visits fewer cells per ray than the uniform grid
+                // at a comparable memory budget (the lean preset takes less memory than the grid).
+                let visits = |name: &str| row(name)["avg_visits"].as_f64().unwrap();
+                let memory = |name: &str| row(name)["memory_bytes"].as_f64().unwrap();
+                assert!(
+                    memory("octree-lean") <= memory("grid"),
+                    "{}",
+                    row("octree-lean")
+                );
+                for octree in ["octree", "octree-lean"] {
+                    assert!(
+                        visits(octree) < visits("grid"),
+                        "{octree} {} visits vs grid {}",
+                        visits(octree),
+                        visits("grid")
+                    );
+                }
             }
         }
     }
+}
+
+/// Issue 5's other target, on the built-in teapot in a stadium: the octree needs at most a third
+/// of the uniform grid's primitive tests per primary ray, with no mismatch.
+#[test]
+fn octree_adapts_to_the_teapot_in_a_stadium() {
+    let v = json(&compare(&[
+        "--scene",
+        "teapot-in-stadium",
+        "--structures",
+        "grid,octree",
+        "--width",
+        "128",
+        "--height",
+        "96",
+        "--check-rays",
+        "1000",
+        "--repeats",
+        "1",
+        "--json",
+    ]));
+    let rows = v["results"].as_array().unwrap();
+    let tests = |name: &str| {
+        let r = rows.iter().find(|r| r["structure"] == name).unwrap();
+        assert_eq!(r["mismatches"], 0, "{r}");
+        r["avg_prim_tests"].as_f64().unwrap()
+    };
+    assert!(
+        3.0 * tests("octree") <= tests("grid"),
+        "octree {} vs grid {} tests per ray",
+        tests("octree"),
+        tests("grid")
+    );
 }

@@ -116,6 +116,16 @@ fn lanes(bits: u32) -> BVec3A {
     LANES[(bits & 7) as usize]
 }
 
+/// Calls `f` with every non-empty subset of the bits of `mask`.
+#[inline(always)]
+fn for_each_subset(mask: u32, mut f: impl FnMut(u32)) {
+    let mut sub = mask;
+    while sub != 0 {
+        f(sub);
+        sub = (sub - 1) & mask;
+    }
+}
+
 /// A node whose children are being walked: its box, its block, and the children still to visit
 /// (block indices, four bits each, the next in the low bits).
 #[derive(Clone, Copy, Debug)]
@@ -152,8 +162,8 @@ fn children_order(
         & !r.flat_bits;
     let (mut order, mut count, mut seen) = (0u32, 0u32, 0u32);
     // Only a node the ray enters before `t_from` can have children that end before it. PERF:
-    // skipping the test elsewhere, with the lane masks from a table, took the bunny's primary
-    // rays from 3.47 to 3.75 Mrays/s (same command as below).
+    // testing the children of those nodes only, and taking the lane masks from a table, took
+    // the bunny's primary rays from 3.47 to 3.75 Mrays/s (same command as below).
     let starts_inside = t_enter < t_from;
     let mut add = |c: u32| {
         if seen & 1 << c == 0 {
@@ -167,11 +177,11 @@ fn children_order(
             }
         }
     };
-    // Every combination of the crossings that tie with the entry, in increasing order.
-    let base = first & !tie;
+    // The first child, with every combination of the crossings that tie with the entry, in
+    // increasing order.
     let mut sub = 0;
     loop {
-        add(base | sub);
+        add(first & !tie | sub);
         if sub == tie {
             break;
         }
@@ -205,21 +215,13 @@ fn children_order(
         }
         // Mid-planes crossed together with this one: the children of the other orders too.
         let side = t_mid.cmple(Vec3A::splat(widen(t))).bitmask() & !c & !(1 << a) & 7;
-        let mut sub = side;
-        while sub != 0 {
-            add(c | sub);
-            sub = (sub - 1) & side;
-        }
+        for_each_subset(side, |sub| add(c | sub));
         c |= 1 << a;
         add(c);
     }
     // Mid-planes crossed together with the node's exit.
     let side = t_mid.cmple(Vec3A::splat(widen(t_exit))).bitmask() & !c & 7;
-    let mut sub = side;
-    while sub != 0 {
-        add(c | sub);
-        sub = (sub - 1) & side;
-    }
+    for_each_subset(side, |sub| add(c | sub));
     (order, count)
 }
 

@@ -35,6 +35,7 @@ mod brute;
 mod clip;
 pub mod leaf;
 mod mailbox;
+pub mod measure;
 mod mesh;
 mod obj;
 mod primitive;

@@ -11,10 +11,10 @@
 //! and traces are single-threaded, and a time is the best of three, so compare times only within
 //! one run.
 
+use rt_core::Accel;
+use rt_core::measure::measure;
 use rt_core::raygen::Camera;
-use rt_core::{Accel, Counters};
 use rt_grid::{Grid, GridParams};
-use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let arg = std::env::args()
@@ -49,37 +49,18 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             parallel: false,
             ..GridParams::standard()
         };
-        let mut build_ms = f64::INFINITY;
-        let mut grid = None;
-        for _ in 0..3 {
-            let start = Instant::now();
-            let built = Grid::build(&tris, &params);
-            build_ms = build_ms.min(start.elapsed().as_secs_f64() * 1e3);
-            grid = Some(built);
-        }
-        let grid = grid.expect("built at least once");
-        let mut c = Counters::default();
-        for r in &rays {
-            grid.intersect_with(r, &mut c);
-        }
-        let mut trace_s = f64::INFINITY;
-        for _ in 0..3 {
-            let start = Instant::now();
-            let hits = rays.iter().filter(|r| grid.intersect(r).is_some()).count();
-            trace_s = trace_s.min(start.elapsed().as_secs_f64());
-            std::hint::black_box(hits);
-        }
-        let s = grid.build_stats();
-        let per_ray = |x: u64| x as f64 / rays.len() as f64;
+        let m = measure::<Grid<_>>(&tris, &params, &rays, 3);
+        let s = m.accel.build_stats();
         println!(
-            "{density:>7} {:>9} {:>9.2} {:>7.1} {build_ms:>8.1} {:>10.1} {:>9.2} {:>10.2} {:>8.2}",
+            "{density:>7} {:>9} {:>9.2} {:>7.1} {:>8.1} {:>10.1} {:>9.2} {:>10.2} {:>8.2}",
             s.nodes,
             s.duplication(),
-            grid.memory_bytes() as f64 / (1024.0 * 1024.0),
-            per_ray(c.node_visits),
-            per_ray(c.prim_tests),
-            per_ray(c.mailbox_skips),
-            rays.len() as f64 / trace_s / 1e6,
+            m.accel.memory_bytes() as f64 / (1024.0 * 1024.0),
+            m.build_ms,
+            m.per_ray(m.counters.node_visits),
+            m.per_ray(m.counters.prim_tests),
+            m.per_ray(m.counters.mailbox_skips),
+            m.mrays_per_s(),
         );
     }
     Ok(())

@@ -7,13 +7,13 @@
 //! ```
 //!
 //! The rays are `cargo xtask compare`'s default primary rays (1024×768). The counts are
-//! deterministic; a build time is the best of three single-threaded builds, so compare the times
-//! only within one run.
+//! deterministic; a build time is the best of three single-threaded builds (`rt_core::measure`,
+//! which also times three traces), so compare the times only within one run.
 
+use rt_core::Accel;
+use rt_core::measure::measure;
 use rt_core::raygen::Camera;
-use rt_core::{Accel, Counters};
 use rt_kdtree::{KdParams, KdTree};
-use std::time::Instant;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args()
@@ -62,28 +62,16 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             parallel: false,
             ..params
         };
-        let mut best_ms = f64::INFINITY;
-        let mut tree = None;
-        for _ in 0..3 {
-            let start = Instant::now();
-            let built = KdTree::build(&tris, &params);
-            best_ms = best_ms.min(start.elapsed().as_secs_f64() * 1e3);
-            tree = Some(built);
-        }
-        let tree = tree.expect("built at least once");
-        let mut c = Counters::default();
-        for r in &rays {
-            tree.intersect_with(r, &mut c);
-        }
-        let s = tree.build_stats();
-        let per_ray = |x: u64| x as f64 / rays.len() as f64;
+        let m = measure::<KdTree<_>>(&tris, &params, &rays, 3);
+        let s = m.accel.build_stats();
         println!(
-            "{name:<32} {:>9} {:>5} {:>9.2} {:>10.1} {:>9.3} {best_ms:>8.0}",
+            "{name:<32} {:>9} {:>5} {:>9.2} {:>10.1} {:>9.3} {:>8.0}",
             s.nodes,
             s.max_depth,
             s.duplication(),
-            per_ray(c.node_visits),
-            per_ray(c.prim_tests),
+            m.per_ray(m.counters.node_visits),
+            m.per_ray(m.counters.prim_tests),
+            m.build_ms,
         );
     }
     Ok(())

@@ -12,50 +12,31 @@
 //! 512×384 primary rays; builds and traces are single-threaded, and a time is the best of three,
 //! so compare times only within one run.
 
+use rt_core::measure::measure;
 use rt_core::raygen::Camera;
-use rt_core::{Accel, Counters, Ray, Triangle};
+use rt_core::{Accel, Ray, Triangle};
 use rt_grid::{Grid, GridParams};
 use rt_octree::{Octree, OctreeParams};
-use std::time::Instant;
 
-/// Builds `A` (best of three), traces `rays` counted and timed, and prints one row.
+/// Measures `A` (best of three builds and traces) and prints one row.
 fn row<A: Accel<Prim = Triangle>>(
     label: &str,
     tris: &[Triangle],
     rays: &[Ray],
     params: &A::Params,
 ) {
-    let mut build_ms = f64::INFINITY;
-    let mut built = None;
-    for _ in 0..3 {
-        let start = Instant::now();
-        let a = A::build(tris, params);
-        build_ms = build_ms.min(start.elapsed().as_secs_f64() * 1e3);
-        built = Some(a);
-    }
-    let a = built.expect("built at least once");
-    let mut c = Counters::default();
-    for r in rays {
-        a.intersect_with(r, &mut c);
-    }
-    let mut trace_s = f64::INFINITY;
-    for _ in 0..3 {
-        let start = Instant::now();
-        let hits = rays.iter().filter(|r| a.intersect(r).is_some()).count();
-        trace_s = trace_s.min(start.elapsed().as_secs_f64());
-        std::hint::black_box(hits);
-    }
-    let s = a.build_stats();
-    let per_ray = |x: u64| x as f64 / rays.len() as f64;
+    let m = measure::<A>(tris, params, rays, 3);
+    let s = m.accel.build_stats();
     println!(
-        "{label:>12} {:>9} {:>9.2} {:>7.2} {build_ms:>8.1} {:>10.2} {:>9.2} {:>10.2} {:>8.2}",
+        "{label:>12} {:>9} {:>9.2} {:>7.2} {:>8.1} {:>10.2} {:>9.2} {:>10.2} {:>8.2}",
         s.nodes,
         s.duplication(),
-        a.memory_bytes() as f64 / (1024.0 * 1024.0),
-        per_ray(c.node_visits),
-        per_ray(c.prim_tests),
-        per_ray(c.mailbox_skips),
-        rays.len() as f64 / trace_s / 1e6,
+        m.accel.memory_bytes() as f64 / (1024.0 * 1024.0),
+        m.build_ms,
+        m.per_ray(m.counters.node_visits),
+        m.per_ray(m.counters.prim_tests),
+        m.per_ray(m.counters.mailbox_skips),
+        m.mrays_per_s(),
     );
 }
 

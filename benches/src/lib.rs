@@ -1,13 +1,19 @@
 //! Shared set-up for the benchmarks: scenes and ray sets, identical for every contender.
 
-use rt_core::raygen::Camera;
-use rt_core::{Aabb, Primitive, Ray, Triangle, conformance::shared_meshes_dir, scenes};
+#[cfg(feature = "embree")]
+pub mod embree;
+
+use rt_core::raygen::{self, Camera, RayKind};
+use rt_core::{Aabb, Hit, Primitive, Ray, Triangle, conformance::shared_meshes_dir, scenes};
 
 /// A named triangle scene.
 #[derive(Debug)]
 pub struct BenchScene {
     /// Short name for benchmark ids.
     pub name: &'static str,
+    /// What `--scene` would take for it in `cargo xtask compare`: a built-in name or a path. It
+    /// picks the camera ([`scenes::camera_for`]).
+    pub spec: String,
     /// The triangles.
     pub triangles: Vec<Triangle>,
 }
@@ -21,10 +27,55 @@ impl BenchScene {
             .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()))
     }
 
-    /// Primary rays of the framing camera `compare` uses.
-    pub fn primary_rays(&self, width: u32, height: u32) -> Vec<Ray> {
-        Camera::framing(&self.bounds(), width, height).primary_rays(width, height)
+    /// The scene's camera for a `width × height` image, as `compare` chooses it.
+    pub fn camera(&self, width: u32, height: u32) -> Camera {
+        scenes::camera_for(&self.spec, &self.bounds(), width, height)
     }
+
+    /// Primary rays of the camera `compare` uses.
+    pub fn primary_rays(&self, width: u32, height: u32) -> Vec<Ray> {
+        self.camera(width, height).primary_rays(width, height)
+    }
+
+    /// The rays of one kind, exactly as `cargo xtask compare --rays KIND` makes them (seed 1);
+    /// `closest_hits` answers the primary rays that shadow rays start from.
+    pub fn rays(
+        &self,
+        kind: RayKind,
+        (width, height): (u32, u32),
+        closest_hits: impl FnOnce(&[Ray]) -> Vec<Option<Hit>>,
+    ) -> Vec<Ray> {
+        raygen::rays_of_kind(
+            kind,
+            &self.camera(width, height),
+            &self.bounds(),
+            (width, height),
+            1,
+            closest_hits,
+        )
+    }
+}
+
+fn builtin(name: &'static str) -> BenchScene {
+    BenchScene {
+        name,
+        spec: name.to_string(),
+        triangles: scenes::builtin(name).expect("built-in scene").triangles(),
+    }
+}
+
+/// The shared mesh `file` under the name `name`, when `../shared/meshes` is present.
+///
+/// # Panics
+/// If the shared meshes are missing under `CI=true`, or the file does not load.
+fn shared(name: &'static str, file: &str) -> Option<BenchScene> {
+    let path = shared_meshes_dir()?.join(file);
+    let mesh = rt_core::load_obj(&path).unwrap_or_else(|e| panic!("{e}"));
+    Some(BenchScene {
+        name,
+        spec: path.display().to_string(),
+        triangles: mesh.triangles(),
+    })
 }
 
 /// The built-in default scene and, when `../shared/meshes` is present, the Stanford bunny.
@@ -32,18 +83,21 @@ impl BenchScene {
 /// # Panics
 /// If the shared meshes are missing under `CI=true`, or the bunny does not load.
 pub fn scenes() -> Vec<BenchScene> {
-    let mut out = vec![BenchScene {
-        name: "sphereflake",
-        triangles: scenes::builtin("sphereflake")
-            .expect("built-in scene")
-            .triangles(),
-    }];
-    if let Some(dir) = shared_meshes_dir() {
-        let mesh = rt_core::load_obj(dir.join("stanford-bunny.obj")).expect("the bunny loads");
-        out.push(BenchScene {
-            name: "bunny",
-            triangles: mesh.triangles(),
-        });
-    }
+    let mut out = vec![builtin("sphereflake")];
+    out.extend(shared("bunny", "stanford-bunny.obj"));
+    out
+}
+
+/// The four scenes of the Embree comparison: the Stanford bunny and the Utah teapot (when
+/// `../shared/meshes` is present), the sphereflake and the teapot in a stadium.
+///
+/// # Panics
+/// If the shared meshes are missing under `CI=true`, or a mesh does not load.
+pub fn peer_scenes() -> Vec<BenchScene> {
+    let mut out = Vec::new();
+    out.extend(shared("bunny", "stanford-bunny.obj"));
+    out.extend(shared("teapot", "teapot.obj"));
+    out.push(builtin("sphereflake"));
+    out.push(builtin("teapot-in-stadium"));
     out
 }

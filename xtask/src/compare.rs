@@ -9,7 +9,7 @@
 use crate::structures::{self, Query, Traceable};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rt_bvh::{Bvh, BvhParams};
-use rt_core::raygen::{self, Camera};
+use rt_core::raygen;
 use rt_core::scenes::{self, BUILTIN_SCENES};
 use rt_core::{Aabb, Accel, Hit, Primitive, Ray, Rng, Triangle};
 use std::fmt::Write as _;
@@ -402,37 +402,25 @@ fn make_rays(
         let rays = raygen::read_rays_file(path).map_err(|e| e.to_string())?;
         return Ok((rays, "file", query));
     }
-    // A built-in scene may have its own viewpoint; anything else is framed whole.
-    let camera = match scenes::find(&args.scene) {
-        Some(scene) => scene.camera(bounds, args.width, args.height),
-        None => Camera::framing(bounds, args.width, args.height),
+    let camera = scenes::camera_for(&args.scene, bounds, args.width, args.height);
+    let shared_kind = match kind {
+        RayKind::Primary => raygen::RayKind::Primary,
+        RayKind::Incoherent => raygen::RayKind::Incoherent,
+        RayKind::Shadow => raygen::RayKind::Shadow,
     };
-    Ok(match kind {
-        RayKind::Primary => (
-            camera.primary_rays(args.width, args.height),
-            "primary",
-            query,
-        ),
-        RayKind::Incoherent => {
-            let n = args.width as usize * args.height as usize;
-            (
-                raygen::incoherent_rays(bounds, n, args.seed),
-                "incoherent",
-                query,
-            )
-        }
-        RayKind::Shadow => {
-            // The primary hits come from a SAH BVH; any correct structure gives the same ones.
-            let primary = camera.primary_rays(args.width, args.height);
+    let rays = raygen::rays_of_kind(
+        shared_kind,
+        &camera,
+        bounds,
+        (args.width, args.height),
+        args.seed,
+        // The primary hits come from a SAH BVH; any correct structure gives the same ones.
+        |primary| {
             let bvh = Bvh::build(tris, &BvhParams::sah());
-            let hits: Vec<Option<Hit>> = primary.iter().map(|r| bvh.intersect(r)).collect();
-            (
-                raygen::shadow_rays(&primary, &hits, raygen::default_light(bounds)),
-                "shadow",
-                query,
-            )
-        }
-    })
+            primary.iter().map(|r| bvh.intersect(r)).collect()
+        },
+    );
+    Ok((rays, shared_kind.name(), query))
 }
 
 fn trace_row(

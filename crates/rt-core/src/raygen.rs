@@ -118,6 +118,60 @@ pub fn shadow_rays(primary: &[Ray], hits: &[Option<Hit>], light: Vec3) -> Vec<Ra
         .collect()
 }
 
+/// The three ray sets every measurement in this project uses.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum RayKind {
+    /// One ray per pixel of a camera's image (closest-hit queries).
+    Primary,
+    /// Random origins inside the scene box, random directions (closest-hit queries).
+    Incoherent,
+    /// Occlusion rays from the primary hits to [`default_light`] (any-hit queries).
+    Shadow,
+}
+
+impl RayKind {
+    /// All three, in report order.
+    pub const ALL: [RayKind; 3] = [RayKind::Primary, RayKind::Incoherent, RayKind::Shadow];
+
+    /// The lower-case name reports use (`primary`, `incoherent`, `shadow`).
+    pub fn name(self) -> &'static str {
+        match self {
+            RayKind::Primary => "primary",
+            RayKind::Incoherent => "incoherent",
+            RayKind::Shadow => "shadow",
+        }
+    }
+
+    /// Whether these rays are traced as any-hit (occlusion) queries.
+    pub fn is_any_hit(self) -> bool {
+        self == RayKind::Shadow
+    }
+}
+
+/// The rays of one kind, exactly as `cargo xtask compare` and the benchmarks trace them:
+/// `width × height` primary rays of `camera`; as many incoherent rays in `bounds` drawn with
+/// `seed`; or one shadow ray per primary hit towards [`default_light`]. Shadow rays need the
+/// primary rays' closest hits, which `closest_hits` computes (with any correct structure: they
+/// all give the same answers).
+pub fn rays_of_kind(
+    kind: RayKind,
+    camera: &Camera,
+    bounds: &Aabb,
+    (width, height): (u32, u32),
+    seed: u64,
+    closest_hits: impl FnOnce(&[Ray]) -> Vec<Option<Hit>>,
+) -> Vec<Ray> {
+    match kind {
+        RayKind::Primary => camera.primary_rays(width, height),
+        RayKind::Incoherent => incoherent_rays(bounds, width as usize * height as usize, seed),
+        RayKind::Shadow => {
+            let primary = camera.primary_rays(width, height);
+            let hits = closest_hits(&primary);
+            shadow_rays(&primary, &hits, default_light(bounds))
+        }
+    }
+}
+
 /// An error reading a rays file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct RaysFileError {

@@ -59,6 +59,15 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
     },
 ];
 
+/// The camera `compare` and the benchmarks use for the scene `spec` (a built-in name or a file):
+/// a built-in scene's own viewpoint when it has one, else one framing `bounds`.
+pub fn camera_for(spec: &str, bounds: &crate::Aabb, width: u32, height: u32) -> Camera {
+    match find(spec) {
+        Some(scene) => scene.camera(bounds, width, height),
+        None => Camera::framing(bounds, width, height),
+    }
+}
+
 /// The built-in scene called `name`, if there is one.
 pub fn builtin(name: &str) -> Option<Mesh> {
     find(name).map(|s| (s.make)())

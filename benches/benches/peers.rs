@@ -1,0 +1,571 @@
+//! rt-bvh's presets against Embree 3 on the same triangles and the same rays, in one run:
+//! primary, incoherent and shadow (any-hit) rays traced on one thread, and builds on one thread
+//! and on all threads, over the bunny, the teapot, the sphereflake and the teapot in a stadium.
+//! It prints the measurements and the ratio table (rt-bvh's default preset ÷ Embree, per scene
+//! and ray kind, with geometric means), so nobody divides by hand.
+//!
+//! ```sh
+//! cargo bench -p rt-benches --features embree --bench peers            # with Embree
+//! cargo bench -p rt-benches --bench peers                              # rt-bvh's presets only
+//! cargo bench -p rt-benches --features embree --bench peers -- --passes 3 --scenes bunny --json out.json
+//! ```
+//!
+//! Method: every contender traces every ray set `--passes` times (5 by default), the passes of
+//! all contenders interleaved (A B C A B C ...) so that drift in the machine's speed affects all
+//! alike, after one untimed warm-up pass each; the median pass is reported. Builds likewise.
+//! Embree uses its default scene flags and build quality `medium` (its default; the ratios divide
+//! by it), with `high` (spatial splits) shown beside it. Answers are checked: all rt-bvh presets
+//! must agree exactly (the run panics otherwise), and the rays on which Embree's answer differs
+//! from rt-bvh's are counted (Embree's triangle test is not watertight and breaks ties its own
+//! way, so a few edge rays differ).
+
+use rt_benches::{BenchScene, peer_scenes};
+use rt_bvh::Bvh;
+use rt_core::raygen::RayKind;
+use rt_core::{Accel, Hit, Ray, Triangle};
+use std::fmt::Write as _;
+use std::time::Instant;
+
+/// One traced contender: a timed pass over a ray slice (returns the hit count, so the work
+/// cannot be optimized away) and single answers for the checks. The per-ray loop inside `pass`
+/// is monomorphized; the box is crossed once per pass.
+struct Tracer {
+    name: String,
+    pass: PassFn,
+    answer: AnswerFn,
+}
+
+/// Traces a ray slice (closest hits, or any hits when the flag is set); returns the hit count.
+type PassFn = Box<dyn Fn(&[Ray], bool) -> usize>;
+/// One ray's answer (any-hit answers are `Some` with primitive `u32::MAX` when occluded).
+type AnswerFn = Box<dyn Fn(&Ray, bool) -> Option<Hit>>;
+
+const OCCLUDED: Hit = Hit {
+    prim: u32::MAX,
+    t: f32::NAN,
+    u: 0.0,
+    v: 0.0,
+};
+
+fn accel_tracer<A: Accel<Prim = Triangle> + 'static>(name: String, accel: A) -> Tracer {
+    let accel = std::rc::Rc::new(accel);
+    let a2 = accel.clone();
+    Tracer {
+        name,
+        pass: Box::new(move |rays, any| {
+            if any {
+                rays.iter().filter(|r| accel.occluded(r)).count()
+            } else {
+                rays.iter().filter(|r| accel.intersect(r).is_some()).count()
+            }
+        }),
+        answer: Box::new(move |r, any| {
+            if any {
+                a2.occluded(r).then_some(OCCLUDED)
+            } else {
+                a2.intersect(r)
+            }
+        }),
+    }
+}
+
+#[cfg(feature = "embree")]
+fn embree_tracer(name: &str, scene: rt_benches::embree::EmbreeScene) -> Tracer {
+    let scene = std::rc::Rc::new(scene);
+    let s2 = scene.clone();
+    Tracer {
+        name: name.to_string(),
+        pass: Box::new(move |rays, any| {
+            if any {
+                rays.iter().filter(|r| scene.occluded(r)).count()
+            } else {
+                rays.iter().filter(|r| scene.intersect(r).is_some()).count()
+            }
+        }),
+        answer: Box::new(move |r, any| {
+            if any {
+                s2.occluded(r).then_some(OCCLUDED)
+            } else {
+                s2.intersect(r).map(|(prim, t)| Hit {
+                    prim,
+                    t,
+                    u: 0.0,
+                    v: 0.0,
+                })
+            }
+        }),
+    }
+}
+
+/// One timed contender: runs one pass (a build or a trace) and drops the result.
+type BuildFn<'a> = Box<dyn Fn() + 'a>;
+
+struct Options {
+    passes: usize,
+    width: u32,
+    height: u32,
+    scenes: Vec<String>,
+    json: Option<String>,
+}
+
+fn options() -> Options {
+    let mut o = Options {
+        passes: 5,
+        width: 1024,
+        height: 768,
+        scenes: Vec::new(),
+        json: None,
+    };
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        let mut value = |what: &str| {
+            args.next()
+                .unwrap_or_else(|| panic!("{what} needs a value"))
+        };
+        match a.as_str() {
+            "--passes" => o.passes = value("--passes").parse().expect("--passes N"),
+            "--width" => o.width = value("--width").parse().expect("--width N"),
+            "--height" => o.height = value("--height").parse().expect("--height N"),
+            "--scenes" => {
+                o.scenes = value("--scenes").split(',').map(str::to_string).collect();
+            }
+            "--json" => o.json = Some(value("--json")),
+            // `cargo bench` passes `--bench`; other harness flags do not apply here.
+            _ => {}
+        }
+    }
+    o.passes = o.passes.max(1);
+    o
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+fn geomean(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x.ln()).sum::<f64>() / v.len() as f64).exp()
+}
+
+/// Times each closure `passes` times, interleaved, after one untimed warm-up; medians in ms.
+fn time_interleaved(fs: &[BuildFn<'_>], passes: usize) -> Vec<f64> {
+    for f in fs {
+        f();
+    }
+    let mut times = vec![Vec::new(); fs.len()];
+    for _ in 0..passes {
+        for (i, f) in fs.iter().enumerate() {
+            let t = Instant::now();
+            f();
+            times[i].push(t.elapsed().as_secs_f64() * 1e3);
+        }
+    }
+    times.into_iter().map(median).collect()
+}
+
+/// Results of one scene and ray kind.
+struct TraceResult {
+    scene: &'static str,
+    kind: RayKind,
+    rays: usize,
+    /// Mrays/s per tracer, in tracer order.
+    mrays: Vec<f64>,
+    /// Rays on which each tracer's answer differs from rt-bvh's default preset.
+    differs: Vec<usize>,
+}
+
+struct BuildResult {
+    scene: &'static str,
+    triangles: usize,
+    /// (contender, threads label, median ms)
+    rows: Vec<(String, String, f64)>,
+}
+
+fn agree(any: bool, a: Option<Hit>, b: Option<Hit>) -> bool {
+    if any {
+        a.is_some() == b.is_some()
+    } else {
+        Hit::agree(a, b)
+    }
+}
+
+fn threads_all() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+fn pool(threads: usize) -> rayon::ThreadPool {
+    rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .expect("a rayon pool")
+}
+
+/// Times every build contender on one thread and on all threads, `passes` times each after a
+/// warm-up pass, all interleaved; medians in ms.
+///
+/// Embree runs on TBB, whose thread limit is process-wide: while a 1-thread device exists, every
+/// device is limited to one thread. So each pass makes one device for its thread count, builds
+/// once untimed on it (TBB starts its workers lazily), times its builds and drops it before the
+/// next thread count's device is made.
+fn bench_builds(scene: &BenchScene, passes: usize) -> BuildResult {
+    let tris = &scene.triangles;
+    let counts = [1, threads_all()];
+    let pools = counts.map(pool);
+    let presets = Bvh::<Triangle>::presets();
+    let mut names: Vec<(String, String)> = Vec::new();
+    let mut times: Vec<Vec<f64>> = Vec::new();
+    let mut record = |name: String, threads: usize, pass: usize, ms: f64| {
+        let label = if threads == 1 {
+            "1".to_string()
+        } else {
+            "all".to_string()
+        };
+        let key = (name, label);
+        let i = names.iter().position(|k| *k == key).unwrap_or_else(|| {
+            names.push(key);
+            times.push(Vec::new());
+            names.len() - 1
+        });
+        if pass > 0 {
+            times[i].push(ms);
+        }
+    };
+    let timed = |f: &mut dyn FnMut()| {
+        let t = Instant::now();
+        f();
+        t.elapsed().as_secs_f64() * 1e3
+    };
+    for pass in 0..=passes {
+        for (threads, pool) in counts.iter().zip(&pools) {
+            for (preset, params) in &presets {
+                let ms = timed(&mut || pool.install(|| drop(Bvh::build(tris, params))));
+                record(format!("rt-bvh {preset}"), *threads, pass, ms);
+            }
+            #[cfg(feature = "embree")]
+            {
+                use rt_benches::embree::{EmbreeScene, Quality};
+                let device = EmbreeScene::device((*threads == 1).then_some(1)).expect("a device");
+                drop(EmbreeScene::build(&device, tris, Quality::Medium).expect("Embree build"));
+                for (quality, qname) in [(Quality::Medium, "medium"), (Quality::High, "high")] {
+                    let ms = timed(&mut || {
+                        drop(EmbreeScene::build(&device, tris, quality).expect("Embree build"));
+                    });
+                    record(format!("embree {qname}"), *threads, pass, ms);
+                }
+            }
+        }
+    }
+    // Rows in pairs: each contender's 1-thread time, then its all-threads time.
+    let mut rows: Vec<(String, String, f64)> = names
+        .into_iter()
+        .zip(times)
+        .map(|((n, l), t)| (n, l, median(t)))
+        .collect();
+    let mut order: Vec<String> = Vec::new();
+    for (n, _, _) in &rows {
+        if !order.contains(n) {
+            order.push(n.clone());
+        }
+    }
+    rows.sort_by_key(|(n, l, _)| (order.iter().position(|o| o == n), l != "1"));
+    BuildResult {
+        scene: scene.name,
+        triangles: tris.len(),
+        rows,
+    }
+}
+
+fn tracers(scene: &BenchScene) -> Vec<Tracer> {
+    #[cfg_attr(not(feature = "embree"), allow(unused_mut))]
+    let mut out: Vec<Tracer> = Bvh::<Triangle>::presets()
+        .into_iter()
+        .map(|(preset, params)| {
+            accel_tracer(
+                format!("rt-bvh {preset}"),
+                Bvh::build(&scene.triangles, &params),
+            )
+        })
+        .collect();
+    #[cfg(feature = "embree")]
+    {
+        use rt_benches::embree::{EmbreeScene, Quality};
+        let device = EmbreeScene::device(Some(1)).expect("an Embree device");
+        for (quality, name) in [
+            (Quality::Medium, "embree medium"),
+            (Quality::High, "embree high"),
+        ] {
+            let s = EmbreeScene::build(&device, &scene.triangles, quality).expect("Embree build");
+            out.push(embree_tracer(name, s));
+        }
+    }
+    out
+}
+
+fn bench_traces(scene: &BenchScene, tracers: &[Tracer], o: &Options, out: &mut Vec<TraceResult>) {
+    for kind in RayKind::ALL {
+        let rays = scene.rays(kind, (o.width, o.height), |primary| {
+            primary
+                .iter()
+                .map(|r| (tracers[0].answer)(r, false))
+                .collect()
+        });
+        let any = kind.is_any_hit();
+        // The checks: every rt-bvh preset answers exactly like the default; other peers' differing
+        // rays are counted.
+        let reference: Vec<Option<Hit>> =
+            rays.iter().map(|r| (tracers[0].answer)(r, any)).collect();
+        let differs: Vec<usize> = tracers
+            .iter()
+            .map(|t| {
+                rays.iter()
+                    .zip(&reference)
+                    .filter(|(r, e)| !agree(any, **e, (t.answer)(r, any)))
+                    .count()
+            })
+            .collect();
+        for (t, &d) in tracers.iter().zip(&differs) {
+            assert!(
+                !t.name.starts_with("rt-bvh") || d == 0,
+                "{} disagrees with {} on {d} {} rays of {}",
+                t.name,
+                tracers[0].name,
+                kind.name(),
+                scene.name
+            );
+        }
+        let fs: Vec<BuildFn<'_>> = tracers
+            .iter()
+            .map(|t| {
+                let rays = &rays;
+                Box::new(move || {
+                    std::hint::black_box((t.pass)(rays, any));
+                }) as BuildFn<'_>
+            })
+            .collect();
+        let ms = time_interleaved(&fs, o.passes);
+        out.push(TraceResult {
+            scene: scene.name,
+            kind,
+            rays: rays.len(),
+            mrays: ms.iter().map(|ms| rays.len() as f64 / ms / 1e3).collect(),
+            differs,
+        });
+    }
+}
+
+fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string())
+}
+
+fn report(names: &[String], traces: &[TraceResult], builds: &[BuildResult], o: &Options) -> String {
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        "\n{} ({} threads); {}×{} rays per set; traces single-threaded; medians of {} interleaved passes",
+        cpu_model(),
+        threads_all(),
+        o.width,
+        o.height,
+        o.passes
+    );
+    let _ = writeln!(
+        s,
+        "\nMrays/s (differing answers from `{}` in brackets, where any)\n",
+        names[0]
+    );
+    let _ = writeln!(s, "| scene | rays | count | {} |", names.join(" | "));
+    let _ = writeln!(s, "| --- | --- | ---: |{}", " ---: |".repeat(names.len()));
+    for r in traces {
+        let cells: Vec<String> = r
+            .mrays
+            .iter()
+            .zip(&r.differs)
+            .map(|(m, &d)| {
+                if d == 0 {
+                    format!("{m:.2}")
+                } else {
+                    format!("{m:.2} [{d}]")
+                }
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} |",
+            r.scene,
+            r.kind.name(),
+            r.rays,
+            cells.join(" | ")
+        );
+    }
+    let _ = writeln!(s, "\nBuild ms (1 thread / {} threads)\n", threads_all());
+    if let Some(b) = builds.first() {
+        let mut heads: Vec<String> = Vec::new();
+        for (n, _, _) in b.rows.iter().step_by(2) {
+            heads.push(n.clone());
+        }
+        let _ = writeln!(s, "| scene | triangles | {} |", heads.join(" | "));
+        let _ = writeln!(s, "| --- | ---: |{}", " ---: |".repeat(heads.len()));
+        for b in builds {
+            let cells: Vec<String> = b
+                .rows
+                .chunks(2)
+                .map(|c| format!("{:.1} / {:.1} ({:.2}×)", c[0].2, c[1].2, c[0].2 / c[1].2))
+                .collect();
+            let _ = writeln!(
+                s,
+                "| {} | {} | {} |",
+                b.scene,
+                b.triangles,
+                cells.join(" | ")
+            );
+        }
+    }
+    // The ratio table: rt-bvh's presets ÷ Embree medium (the default), if Embree ran.
+    let Some(base) = names.iter().position(|n| n == "embree medium") else {
+        let _ = writeln!(
+            s,
+            "\nEmbree not linked: build with `--features embree` (needs libembree-dev) for the ratio table."
+        );
+        return s;
+    };
+    let _ = writeln!(
+        s,
+        "\nRatios, speed ÷ Embree medium's (its default build quality), single-threaded\n"
+    );
+    let kinds = RayKind::ALL;
+    let _ = writeln!(
+        s,
+        "| {} ÷ Embree | {} | build, 1 thread (Embree's time ÷ ours) |",
+        names[0],
+        kinds.map(|k| k.name()).join(" | ")
+    );
+    let _ = writeln!(s, "| --- |{}", " ---: |".repeat(kinds.len() + 1));
+    let ratio = |r: &TraceResult, i: usize| r.mrays[i] / r.mrays[base];
+    let scenes: Vec<&'static str> = builds.iter().map(|b| b.scene).collect();
+    let build_ratio = |b: &BuildResult| {
+        let ours = b.rows[0].2;
+        let embree = b
+            .rows
+            .iter()
+            .find(|(n, l, _)| n == "embree medium" && l == "1")
+            .map_or(f64::NAN, |r| r.2);
+        embree / ours
+    };
+    for (si, scene) in scenes.iter().enumerate() {
+        let cells: Vec<String> = kinds
+            .iter()
+            .map(|k| {
+                traces
+                    .iter()
+                    .find(|r| r.scene == *scene && r.kind == *k)
+                    .map_or("-".into(), |r| format!("{:.2}", ratio(r, 0)))
+            })
+            .collect();
+        let _ = writeln!(
+            s,
+            "| {} | {} | {:.2} |",
+            scene,
+            cells.join(" | "),
+            build_ratio(&builds[si])
+        );
+    }
+    let gm = |i: usize, k: RayKind| {
+        let v: Vec<f64> = traces
+            .iter()
+            .filter(|r| r.kind == k)
+            .map(|r| ratio(r, i))
+            .collect();
+        geomean(&v)
+    };
+    let build_gm = geomean(&builds.iter().map(build_ratio).collect::<Vec<_>>());
+    let _ = writeln!(
+        s,
+        "| **geometric mean** | {} | {:.2} |",
+        kinds.map(|k| format!("**{:.2}**", gm(0, k))).join(" | "),
+        build_gm
+    );
+    let _ = writeln!(
+        s,
+        "\nGeometric means over the scenes, each contender ÷ Embree medium\n"
+    );
+    let _ = writeln!(s, "| contender | {} |", kinds.map(|k| k.name()).join(" | "));
+    let _ = writeln!(s, "| --- |{}", " ---: |".repeat(kinds.len()));
+    for (i, n) in names.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "| {} | {} |",
+            n,
+            kinds.map(|k| format!("{:.2}", gm(i, k))).join(" | ")
+        );
+    }
+    s
+}
+
+fn to_json(
+    names: &[String],
+    traces: &[TraceResult],
+    builds: &[BuildResult],
+    o: &Options,
+) -> String {
+    let traces: Vec<serde_json::Value> = traces
+        .iter()
+        .map(|r| {
+            serde_json::json!({
+                "scene": r.scene, "rays": r.kind.name(), "count": r.rays,
+                "mrays_per_s": r.mrays, "differing": r.differs,
+            })
+        })
+        .collect();
+    let builds: Vec<serde_json::Value> = builds
+        .iter()
+        .map(|b| {
+            let rows: Vec<serde_json::Value> = b
+                .rows
+                .iter()
+                .map(|(n, l, ms)| serde_json::json!({"contender": n, "threads": l, "ms": ms}))
+                .collect();
+            serde_json::json!({"scene": b.scene, "triangles": b.triangles, "rows": rows})
+        })
+        .collect();
+    serde_json::to_string_pretty(&serde_json::json!({
+        "cpu": cpu_model(), "threads": threads_all(), "width": o.width, "height": o.height,
+        "passes": o.passes, "contenders": names, "traces": traces, "builds": builds,
+    }))
+    .expect("JSON")
+}
+
+fn main() {
+    let o = options();
+    let scenes: Vec<BenchScene> = peer_scenes()
+        .into_iter()
+        .filter(|s| o.scenes.is_empty() || o.scenes.iter().any(|n| n == s.name))
+        .collect();
+    let mut traces = Vec::new();
+    let mut builds = Vec::new();
+    let mut names = Vec::new();
+    for scene in &scenes {
+        eprintln!("{}: {} triangles", scene.name, scene.triangles.len());
+        builds.push(bench_builds(scene, o.passes));
+        let tracers = tracers(scene);
+        names = tracers.iter().map(|t| t.name.clone()).collect();
+        bench_traces(scene, &tracers, &o, &mut traces);
+    }
+    print!("{}", report(&names, &traces, &builds, &o));
+    if let Some(path) = &o.json {
+        std::fs::write(path, to_json(&names, &traces, &builds, &o)).expect("write the JSON file");
+        eprintln!("wrote {path}");
+    }
+}

@@ -57,12 +57,12 @@ pub use clip::{clip_triangle_bounds, split_triangle_bounds};
 pub use mailbox::Mailbox;
 pub use mesh::{IndexOutOfRange, Mesh};
 pub use obj::{LoadError, LoadErrorKind, load_obj, load_obj_bytes};
-pub use primitive::{PrimHit, Primitive, valid_primitives};
+pub use primitive::{PrimHit, Primitive, TriangleTest, valid_primitives};
 pub use ray::Ray;
 pub use rng::Rng;
 pub use sphere::Sphere;
 pub use stats::{Counters, NoStats, Stats};
-pub use triangle::{MtTriangle, Triangle};
+pub use triangle::{MtTriangle, Shear, Triangle, moller_trumbore_edges};
 
 /// Re-exported so users name the same `Vec3` the library uses.
 pub use glam;

@@ -19,6 +19,15 @@ pub struct PrimHit {
     pub v: f32,
 }
 
+/// The ray–triangle test a triangle primitive runs (see [`Primitive::as_triangle`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum TriangleTest {
+    /// [`Triangle::intersect_watertight`](crate::Triangle::intersect_watertight).
+    Watertight,
+    /// [`Triangle::intersect_moller_trumbore`](crate::Triangle::intersect_moller_trumbore).
+    MollerTrumbore,
+}
+
 /// A geometric primitive that acceleration structures can store and intersect.
 ///
 /// Structures use [`bounds`](Primitive::bounds) and [`centroid`](Primitive::centroid) while
@@ -72,6 +81,18 @@ pub trait Primitive: Clone + Send + Sync + Debug + 'static {
     /// that shrinks `t_max` to the closest hit so far still finds an equally close hit on a
     /// primitive with a smaller index (the tie rule of [`Accel`](crate::Accel)).
     fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit>;
+
+    /// The primitive as a plain triangle and the test its [`intersect`](Primitive::intersect)
+    /// runs, if it is one; `None` (the default) otherwise.
+    ///
+    /// Structures with SIMD triangle kernels (rt-bvh's wide layout) store such primitives
+    /// pre-processed in packs and run that test themselves, bit for bit as the scalar function
+    /// does, instead of calling `intersect`. Return `Some` only when `intersect` and `occludes`
+    /// answer exactly as that test on that triangle does.
+    #[inline]
+    fn as_triangle(&self) -> Option<(crate::Triangle, TriangleTest)> {
+        None
+    }
 
     /// Whether the ray meets the primitive within `ray.t_min ..= t_max`. Defaults to
     /// [`intersect`](Primitive::intersect); primitives may skip computing surface coordinates.

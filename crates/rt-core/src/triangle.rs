@@ -1,6 +1,6 @@
 //! Triangles, with the Möller–Trumbore and the watertight ray–triangle tests.
 
-use crate::{Aabb, PrimHit, Primitive, Ray};
+use crate::{Aabb, PrimHit, Primitive, Ray, TriangleTest};
 use glam::{DVec3, Vec3};
 
 /// A triangle given by its three vertices.
@@ -50,31 +50,7 @@ impl Triangle {
     /// still hit.
     #[inline]
     pub fn intersect_moller_trumbore(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
-        let e1 = self.v1 - self.v0;
-        let e2 = self.v2 - self.v0;
-        let p = ray.dir.cross(e2);
-        let det = e1.dot(p);
-        if det == 0.0 {
-            return None;
-        }
-        let inv = 1.0 / det;
-        let s = ray.origin - self.v0;
-        let u = s.dot(p) * inv;
-        // `contains` is false for NaN, so non-finite input fails every test.
-        if !(0.0..=1.0).contains(&u) {
-            return None;
-        }
-        let q = s.cross(e1);
-        let v = ray.dir.dot(q) * inv;
-        if !(v >= 0.0 && u + v <= 1.0) {
-            return None;
-        }
-        let t = e2.dot(q) * inv;
-        if t >= ray.t_min && t <= t_max {
-            Some(PrimHit { t, u, v })
-        } else {
-            None
-        }
+        moller_trumbore_edges(self.v0, self.v1 - self.v0, self.v2 - self.v0, ray, t_max)
     }
 
     /// The watertight test of Woop, Benthin & Wald (JCGT 2013).
@@ -87,11 +63,21 @@ impl Triangle {
     /// sign decision is exact. Points on an edge count as inside.
     #[inline]
     pub fn intersect_watertight(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
-        let (kx, ky, kz) = shear_axes(ray.dir);
-        let sz = 1.0 / ray.dir[kz];
-        let sx = ray.dir[kx] * sz;
-        let sy = ray.dir[ky] * sz;
+        self.intersect_sheared(&Shear::new(ray.dir), ray, t_max)
+    }
 
+    /// [`Triangle::intersect_watertight`] with the ray's [`Shear`] computed beforehand (it
+    /// depends on the ray only), for callers that test many triangles against one ray.
+    #[inline]
+    pub fn intersect_sheared(&self, shear: &Shear, ray: &Ray, t_max: f32) -> Option<PrimHit> {
+        let Shear {
+            kx,
+            ky,
+            kz,
+            sx,
+            sy,
+            sz,
+        } = *shear;
         let a = self.v0 - ray.origin;
         let b = self.v1 - ray.origin;
         let c = self.v2 - ray.origin;
@@ -143,24 +129,85 @@ impl Triangle {
     }
 }
 
-/// The axis permutation of the watertight test: `kz` is the dominant direction axis, and `kx`,
-/// `ky` are swapped when `dir[kz]` is negative so the triangle's winding is preserved.
-#[inline(always)]
-fn shear_axes(dir: Vec3) -> (usize, usize, usize) {
-    let a = dir.abs();
-    let kz = if a.x >= a.y && a.x >= a.z {
-        0
-    } else if a.y >= a.z {
-        1
+/// Möller–Trumbore from the first vertex and the two edges `e1 = v1 - v0`, `e2 = v2 - v0`, which
+/// [`Triangle::intersect_moller_trumbore`] computes per call and pre-processed triangles store:
+/// both give the same answer, bit for bit, for the same edges.
+#[inline]
+pub fn moller_trumbore_edges(
+    v0: Vec3,
+    e1: Vec3,
+    e2: Vec3,
+    ray: &Ray,
+    t_max: f32,
+) -> Option<PrimHit> {
+    let p = ray.dir.cross(e2);
+    let det = e1.dot(p);
+    if det == 0.0 {
+        return None;
+    }
+    let inv = 1.0 / det;
+    let s = ray.origin - v0;
+    let u = s.dot(p) * inv;
+    // `contains` is false for NaN, so non-finite input fails every test.
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let q = s.cross(e1);
+    let v = ray.dir.dot(q) * inv;
+    if !(v >= 0.0 && u + v <= 1.0) {
+        return None;
+    }
+    let t = e2.dot(q) * inv;
+    if t >= ray.t_min && t <= t_max {
+        Some(PrimHit { t, u, v })
     } else {
-        2
-    };
-    let kx = if kz == 2 { 0 } else { kz + 1 };
-    let ky = if kx == 2 { 0 } else { kx + 1 };
-    if dir[kz] < 0.0 {
-        (ky, kx, kz)
-    } else {
-        (kx, ky, kz)
+        None
+    }
+}
+
+/// The per-ray part of the watertight test: the axis permutation (`kz` is the dominant
+/// direction axis; `kx`, `ky` are swapped when `dir[kz]` is negative so the triangle's winding is
+/// preserved) and the shear that maps the ray onto the +z axis.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Shear {
+    /// The axis that becomes x.
+    pub kx: usize,
+    /// The axis that becomes y.
+    pub ky: usize,
+    /// The dominant axis, which becomes z.
+    pub kz: usize,
+    /// `dir[kx] / dir[kz]`.
+    pub sx: f32,
+    /// `dir[ky] / dir[kz]`.
+    pub sy: f32,
+    /// `1 / dir[kz]`.
+    pub sz: f32,
+}
+
+impl Shear {
+    /// The shear of a ray with direction `dir`.
+    #[inline]
+    pub fn new(dir: Vec3) -> Self {
+        let a = dir.abs();
+        let kz = if a.x >= a.y && a.x >= a.z {
+            0
+        } else if a.y >= a.z {
+            1
+        } else {
+            2
+        };
+        let kx = if kz == 2 { 0 } else { kz + 1 };
+        let ky = if kx == 2 { 0 } else { kx + 1 };
+        let (kx, ky) = if dir[kz] < 0.0 { (ky, kx) } else { (kx, ky) };
+        let sz = 1.0 / dir[kz];
+        Self {
+            kx,
+            ky,
+            kz,
+            sx: dir[kx] * sz,
+            sy: dir[ky] * sz,
+            sz,
+        }
     }
 }
 
@@ -199,6 +246,11 @@ impl Primitive for Triangle {
     fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
         self.intersect_watertight(ray, t_max)
     }
+
+    #[inline]
+    fn as_triangle(&self) -> Option<(Triangle, TriangleTest)> {
+        Some((*self, TriangleTest::Watertight))
+    }
 }
 
 /// A [`Triangle`] intersected with Möller–Trumbore instead of the watertight test.
@@ -231,6 +283,10 @@ impl Primitive for MtTriangle {
     #[inline]
     fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
         self.0.intersect_moller_trumbore(ray, t_max)
+    }
+    #[inline]
+    fn as_triangle(&self) -> Option<(Triangle, TriangleTest)> {
+        Some((self.0, TriangleTest::MollerTrumbore))
     }
 }
 

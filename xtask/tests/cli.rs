@@ -116,6 +116,7 @@ fn default_scene_json_has_every_field_and_no_mismatch() {
         [
             "brute-force",
             "bvh",
+            "bvh-binary",
             "bvh-median",
             "bvh-middle",
             "kdtree",
@@ -238,18 +239,19 @@ fn meshes_all_ray_kinds_agree_and_sah_beats_median() {
             assert!(kd["empty_leaves"].as_u64() < kd["leaves"].as_u64(), "{kd}");
             if mesh == "stanford-bunny.obj" && kind == "primary" {
                 assert!(tests("bvh") <= 12.0, "SAH: {} tests per ray", tests("bvh"));
-                // Issue 3's target: the default kd-tree needs fewer primitive tests than the SAH
-                // BVH on the bunny's primary rays (0.765 against 0.792 at this resolution).
+                // Issue 3's target: the default kd-tree needs fewer primitive tests than the
+                // binary SAH BVH on the bunny's primary rays (0.765 against 0.792 at this
+                // resolution). The wide BVH tests more triangles, four at a time.
                 assert!(
-                    tests("kdtree") < tests("bvh"),
+                    tests("kdtree") < tests("bvh-binary"),
                     "kd-tree {} vs BVH {}",
                     tests("kdtree"),
-                    tests("bvh")
+                    tests("bvh-binary")
                 );
                 assert!(
-                    tests("bvh") < tests("bvh-median"),
+                    tests("bvh-binary") < tests("bvh-median"),
                     "SAH {} vs median {}",
-                    tests("bvh"),
+                    tests("bvh-binary"),
                     tests("bvh-median")
                 );
                 // Issue 5's target: the octree visits fewer cells per ray than the uniform grid

@@ -83,16 +83,20 @@
 #![warn(missing_docs)]
 
 mod builder;
+mod kernels;
 mod node;
+mod simd;
 mod traverse;
 mod validate;
 
-pub use node::Node;
+pub use node::{ChildRef, Node, PACK, TriPack, WIDTH, WideNode};
 pub use validate::ValidationError;
 
-use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, Stats};
+use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, Stats, TriangleTest};
+use simd::Isa;
+use traverse::{Packs, Prims, ScalarPacks};
 
-/// The deepest a tree may be, and so the size of the fixed traversal stack.
+/// The deepest a tree may be, and so the size of the fixed traversal stacks.
 pub const MAX_DEPTH: usize = 64;
 
 /// How an interior node chooses where to split.
@@ -107,35 +111,76 @@ pub enum SplitMethod {
     Middle,
 }
 
-/// Build parameters. `Default` is [`BvhParams::sah`].
+/// The node layout.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Layout {
+    /// Two children per node, 32-byte [`Node`]s: the lecture's structure.
+    Binary,
+    /// Up to eight children per 256-byte [`WideNode`], tested with one SIMD slab test; triangles
+    /// in [`TriPack`]s of four tested with one SIMD triangle test.
+    Wide,
+}
+
+/// Which code traces a wide tree (see [`Bvh::set_kernels`]).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Kernels {
+    /// The SIMD kernels compiled for AVX2 and FMA (x86-64 CPUs that have both).
+    Avx2,
+    /// The same kernels compiled for the target's baseline (SSE2 on x86-64, NEON on aarch64).
+    Portable,
+    /// Triangles tested one at a time with the scalar functions of `rt-core`: the reference the
+    /// SIMD kernels are tested against, bit for bit.
+    Scalar,
+}
+
+/// Build parameters. `Default` is [`BvhParams::wide`].
 #[derive(Clone, Debug, PartialEq)]
 pub struct BvhParams {
+    /// Binary or wide nodes.
+    pub layout: Layout,
     /// How nodes are split.
     pub split: SplitMethod,
     /// SAH buckets per axis, clamped to `2..=32`.
     pub bins: u32,
     /// SAH cost of visiting a node, relative to `intersection_cost`.
     pub traversal_cost: f32,
-    /// SAH cost of one primitive test.
+    /// SAH cost of one primitive test (of one pack of four, for the wide layout's triangles).
     pub intersection_cost: f32,
-    /// Most primitives in one leaf, clamped to `1..=255`. SAH may stop earlier when splitting
-    /// does not pay; median and middle split until they reach it.
+    /// Most primitives in one leaf, clamped to `1..=255` for the binary layout, `1..=32` for
+    /// wide triangle packs and `1..=8` for other primitives in the wide layout. SAH may stop
+    /// earlier when splitting does not pay; median and middle split until they reach it.
     pub max_leaf_size: u32,
+    /// Build large subtrees on rayon's threads. The tree is the same either way.
+    pub parallel: bool,
+    /// Force the kernels of a wide tree; `None` picks the fastest this CPU runs.
+    pub kernels: Option<Kernels>,
 }
 
 impl BvhParams {
-    /// Binned SAH with 16 buckets, costs 1 and 1, leaves of up to 8 primitives.
-    pub fn sah() -> Self {
+    /// The wide layout with binned SAH: 16 buckets, costs 1 and 1, leaves of up to 8 triangles.
+    pub fn wide() -> Self {
         Self {
+            layout: Layout::Wide,
             split: SplitMethod::Sah,
             bins: 16,
             traversal_cost: 1.0,
             intersection_cost: 1.0,
             max_leaf_size: 8,
+            parallel: true,
+            kernels: None,
         }
     }
 
-    /// Median split by count (quickselect), leaves of up to 4 primitives.
+    /// The binary layout with binned SAH: 16 buckets, costs 1 and 1, leaves of up to 8
+    /// primitives.
+    pub fn sah() -> Self {
+        Self {
+            layout: Layout::Binary,
+            ..Self::wide()
+        }
+    }
+
+    /// Binary, median split by count (quickselect), leaves of up to 4 primitives.
     pub fn median() -> Self {
         Self {
             split: SplitMethod::Median,
@@ -144,7 +189,7 @@ impl BvhParams {
         }
     }
 
-    /// Middle-of-extent split, leaves of up to 4 primitives.
+    /// Binary, middle-of-extent split, leaves of up to 4 primitives.
     pub fn middle() -> Self {
         Self {
             split: SplitMethod::Middle,
@@ -156,27 +201,57 @@ impl BvhParams {
 
 impl Default for BvhParams {
     fn default() -> Self {
-        Self::sah()
+        Self::wide()
     }
 }
 
 /// A bounding volume hierarchy over primitives of type `P`. See the [crate documentation](crate).
 #[derive(Clone, Debug)]
 pub struct Bvh<P: Primitive> {
-    nodes: Vec<Node>,
+    layout: Layout,
+    binary: Vec<Node>,
+    wide: Vec<WideNode>,
+    packs: Vec<TriPack>,
+    test: Option<TriangleTest>,
     prims: Vec<P>,
     ids: Vec<u32>,
+    kernels: Kernels,
+    isa: Isa,
     max_depth: usize,
     leaves: usize,
+    valid: usize,
 }
 
 impl<P: Primitive> Bvh<P> {
-    /// The flattened nodes, root first, in depth-first order.
-    pub fn nodes(&self) -> &[Node] {
-        &self.nodes
+    /// The layout this tree was built with.
+    pub fn layout(&self) -> Layout {
+        self.layout
     }
 
-    /// The kept primitives, reordered so each leaf's are contiguous.
+    /// The binary tree's nodes, root first, in depth-first order (empty for the wide layout).
+    pub fn nodes(&self) -> &[Node] {
+        &self.binary
+    }
+
+    /// The wide tree's nodes, root first (empty for the binary layout and for an empty tree).
+    pub fn wide_nodes(&self) -> &[WideNode] {
+        &self.wide
+    }
+
+    /// The wide tree's triangle packs, which its leaves index (empty unless the tree is wide
+    /// and every valid primitive is a triangle with one test; see
+    /// [`Primitive::as_triangle`]).
+    pub fn packs(&self) -> &[TriPack] {
+        &self.packs
+    }
+
+    /// The test of the [`packs`](Bvh::packs), if the leaves are packed.
+    pub fn pack_test(&self) -> Option<TriangleTest> {
+        self.test
+    }
+
+    /// The kept primitives, reordered so each leaf's are contiguous (empty when the leaves are
+    /// triangle packs).
     pub fn primitives(&self) -> &[P] {
         &self.prims
     }
@@ -184,6 +259,66 @@ impl<P: Primitive> Bvh<P> {
     /// For each slot of [`primitives`](Bvh::primitives), its index in the build input.
     pub fn primitive_ids(&self) -> &[u32] {
         &self.ids
+    }
+
+    /// The kernels that trace this tree (always [`Kernels::Portable`] for the binary layout,
+    /// whose traversal is scalar).
+    pub fn kernels(&self) -> Kernels {
+        self.kernels
+    }
+
+    /// Chooses the kernels that trace a wide tree. Returns `false`, changing nothing, when this
+    /// CPU cannot run them (AVX2 without AVX2 and FMA) or the tree is binary.
+    pub fn set_kernels(&mut self, kernels: Kernels) -> bool {
+        if self.layout == Layout::Binary {
+            return kernels == Kernels::Portable;
+        }
+        let isa = match kernels {
+            Kernels::Avx2 => match Isa::avx2() {
+                Some(isa) => isa,
+                None => return false,
+            },
+            Kernels::Portable | Kernels::Scalar => Isa::Portable,
+        };
+        self.kernels = kernels;
+        self.isa = isa;
+        true
+    }
+
+    /// The query core shared by [`Accel::intersect_with`] and [`Accel::occluded_with`].
+    #[inline(always)]
+    fn query<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        match self.layout {
+            Layout::Binary => self.traverse_binary::<S, ANY>(ray, stats),
+            Layout::Wide if self.wide.is_empty() || !ray.is_valid() => None,
+            Layout::Wide => {
+                let (nodes, isa) = (&self.wide[..], self.isa);
+                match (self.test, self.kernels) {
+                    (Some(test), Kernels::Scalar) => {
+                        let leaves = ScalarPacks {
+                            packs: &self.packs,
+                            test,
+                        };
+                        simd::dispatch::<_, S, ANY>(isa, nodes, &leaves, ray, stats)
+                    }
+                    (Some(TriangleTest::Watertight), _) => {
+                        let leaves = Packs::<false> { packs: &self.packs };
+                        simd::dispatch::<_, S, ANY>(isa, nodes, &leaves, ray, stats)
+                    }
+                    (Some(TriangleTest::MollerTrumbore), _) => {
+                        let leaves = Packs::<true> { packs: &self.packs };
+                        simd::dispatch::<_, S, ANY>(isa, nodes, &leaves, ray, stats)
+                    }
+                    (None, _) => {
+                        let leaves = Prims {
+                            prims: &self.prims,
+                            ids: &self.ids,
+                        };
+                        simd::dispatch::<_, S, ANY>(isa, nodes, &leaves, ray, stats)
+                    }
+                }
+            }
+        }
     }
 }
 
@@ -194,7 +329,8 @@ impl<P: Primitive> Accel for Bvh<P> {
 
     fn presets() -> Vec<(&'static str, BvhParams)> {
         vec![
-            ("sah", BvhParams::sah()),
+            ("wide", BvhParams::wide()),
+            ("binary", BvhParams::sah()),
             ("median", BvhParams::median()),
             ("middle", BvhParams::middle()),
         ]
@@ -202,45 +338,67 @@ impl<P: Primitive> Accel for Bvh<P> {
 
     fn build(prims: &[P], params: &BvhParams) -> Self {
         let b = builder::build(prims, params);
-        Self {
-            nodes: b.nodes,
+        let mut bvh = Self {
+            layout: params.layout,
+            binary: b.binary,
+            wide: b.wide,
+            packs: b.packs,
+            test: b.test,
             prims: b.prims,
             ids: b.ids,
+            kernels: Kernels::Portable,
+            isa: Isa::Portable,
             max_depth: b.max_depth,
             leaves: b.leaves,
+            valid: b.valid,
+        };
+        if params.layout == Layout::Wide {
+            let wanted = params.kernels.unwrap_or(Kernels::Avx2);
+            if !bvh.set_kernels(wanted) {
+                bvh.set_kernels(Kernels::Portable);
+            }
         }
+        bvh
     }
 
     #[inline]
     fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        self.traverse::<S, false>(ray, stats)
+        self.query::<S, false>(ray, stats)
     }
 
     #[inline]
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.traverse::<S, true>(ray, stats).is_some()
+        self.query::<S, true>(ray, stats).is_some()
     }
 
     fn memory_bytes(&self) -> usize {
         size_of::<Self>()
-            + self.nodes.capacity() * size_of::<Node>()
+            + self.binary.capacity() * size_of::<Node>()
+            + self.wide.capacity() * size_of::<WideNode>()
+            + self.packs.capacity() * size_of::<TriPack>()
             + self.prims.capacity() * size_of::<P>()
             + self.ids.capacity() * size_of::<u32>()
     }
 
     fn build_stats(&self) -> BuildStats {
+        let nodes = match self.layout {
+            Layout::Binary if self.valid == 0 => 0,
+            Layout::Binary => self.binary.len(),
+            Layout::Wide => self.wide.len() + self.leaves,
+        };
+        let mut extra = Vec::new();
+        if self.layout == Layout::Wide {
+            extra.push(("wide nodes", self.wide.len() as f64));
+            extra.push(("triangle packs", self.packs.len() as f64));
+        }
         BuildStats {
-            nodes: if self.prims.is_empty() {
-                0
-            } else {
-                self.nodes.len()
-            },
+            nodes,
             leaves: self.leaves,
             empty_leaves: 0,
             max_depth: self.max_depth,
-            prim_refs: self.prims.len(),
-            valid_prims: self.prims.len(),
-            extra: Vec::new(),
+            prim_refs: self.valid,
+            valid_prims: self.valid,
+            extra,
         }
     }
 }

@@ -1,7 +1,12 @@
-//! Near-child-first iterative traversal, shared by closest-hit and any-hit queries.
+//! The traversals: near-child-first over the binary tree, and over the wide tree with SIMD slab
+//! and triangle tests. Each has one generic core for closest-hit and any-hit queries.
 
+use crate::kernels::{self, RayData, Simd};
+use crate::node::{ChildRef, TriPack, WIDTH, WideNode};
+use crate::simd::Stack;
 use crate::{Bvh, MAX_DEPTH};
-use rt_core::{Hit, Primitive, Ray, SLAB_FAR_SCALE, Stats};
+use rt_core::{Hit, Primitive, Ray, SLAB_FAR_SCALE, Stats, Triangle, TriangleTest};
+use std::ops::Range;
 
 impl<P: Primitive> Bvh<P> {
     /// The traversal core. `ANY = false` finds the closest hit; `ANY = true` returns the first
@@ -14,12 +19,12 @@ impl<P: Primitive> Bvh<P> {
     /// test does, so a primitive tying with the best hit is still found). The stack holds at most one entry per tree level, and the
     /// builder bounds the depth by `MAX_DEPTH`, so a fixed array suffices.
     #[inline(always)]
-    pub(crate) fn traverse<S: Stats, const ANY: bool>(
+    pub(crate) fn traverse_binary<S: Stats, const ANY: bool>(
         &self,
         ray: &Ray,
         stats: &mut S,
     ) -> Option<Hit> {
-        let nodes = &self.nodes[..];
+        let nodes = &self.binary[..];
         let mut best = Hit {
             prim: u32::MAX,
             t: ray.t_max,
@@ -90,6 +95,250 @@ impl<P: Primitive> Bvh<P> {
                     current = index as usize;
                     break;
                 }
+            }
+        }
+    }
+}
+
+/// Entries of the wide traversal's stack: each wide level pushes at most seven siblings, and the
+/// builder keeps the tree at most [`MAX_DEPTH`] levels deep.
+pub(crate) const WIDE_STACK: usize = (WIDTH - 1) * MAX_DEPTH;
+
+/// How the leaves of a wide tree are tested: triangle packs with a SIMD kernel, triangle packs
+/// one triangle at a time through the scalar test (the reference the kernels are tested
+/// against), or primitives of any type.
+pub(crate) trait Leaves {
+    /// Tests the leaf's items against the ray up to `best.t`, updating `best` by the tie rule.
+    /// With `ANY`, returns true at the first hit (and `best` is then meaningless).
+    fn test<X: Simd, S: Stats, const ANY: bool>(
+        &self,
+        simd: X,
+        items: Range<usize>,
+        r: &RayData<X>,
+        ray: &Ray,
+        best: &mut Hit,
+        stats: &mut S,
+    ) -> bool;
+}
+
+/// Triangle packs and the kernel that tests them (`MT`: Möller–Trumbore, else watertight).
+pub(crate) struct Packs<'a, const MT: bool> {
+    pub packs: &'a [TriPack],
+}
+
+impl<const MT: bool> Leaves for Packs<'_, MT> {
+    #[inline(always)]
+    fn test<X: Simd, S: Stats, const ANY: bool>(
+        &self,
+        simd: X,
+        items: Range<usize>,
+        r: &RayData<X>,
+        ray: &Ray,
+        best: &mut Hit,
+        stats: &mut S,
+    ) -> bool {
+        for pack in &self.packs[items] {
+            for _ in 0..pack.len() {
+                stats.prim_test();
+            }
+            let h = if MT {
+                kernels::moller_trumbore4(simd, pack, r, best.t)
+            } else {
+                kernels::watertight4(simd, pack, r, best.t)
+            };
+            if ANY && h.mask != 0 {
+                return true;
+            }
+            // Lanes the kernel could not decide in single precision: the scalar test, which
+            // redoes them in double precision.
+            let mut redo = h.redo;
+            while redo != 0 {
+                let lane = redo.trailing_zeros() as usize;
+                redo &= redo - 1;
+                let tri = pack.triangle(lane, TriangleTest::Watertight);
+                if let Some(p) = tri.intersect_sheared(&r.shear, ray, best.t) {
+                    if ANY {
+                        return true;
+                    }
+                    consider(best, pack.ids[lane], p.t, p.u, p.v);
+                }
+            }
+            let mut mask = h.mask;
+            if mask != 0 {
+                let (t, u, v) = (simd.store4(h.t), simd.store4(h.u), simd.store4(h.v));
+                while mask != 0 {
+                    let lane = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    consider(best, pack.ids[lane], t[lane], u[lane], v[lane]);
+                }
+            }
+        }
+        false
+    }
+}
+
+/// Triangle packs tested one lane at a time with the scalar functions: the reference.
+pub(crate) struct ScalarPacks<'a> {
+    pub packs: &'a [TriPack],
+    pub test: TriangleTest,
+}
+
+impl Leaves for ScalarPacks<'_> {
+    fn test<X: Simd, S: Stats, const ANY: bool>(
+        &self,
+        _: X,
+        items: Range<usize>,
+        r: &RayData<X>,
+        ray: &Ray,
+        best: &mut Hit,
+        stats: &mut S,
+    ) -> bool {
+        for pack in &self.packs[items] {
+            for lane in 0..pack.len() {
+                stats.prim_test();
+                let row = |k: usize| {
+                    rt_core::glam::Vec3::new(
+                        pack.rows[3 * k][lane],
+                        pack.rows[3 * k + 1][lane],
+                        pack.rows[3 * k + 2][lane],
+                    )
+                };
+                let hit = match self.test {
+                    TriangleTest::Watertight => Triangle::new(row(0), row(1), row(2))
+                        .intersect_sheared(&r.shear, ray, best.t),
+                    TriangleTest::MollerTrumbore => {
+                        rt_core::moller_trumbore_edges(row(0), row(1), row(2), ray, best.t)
+                    }
+                };
+                if let Some(p) = hit {
+                    if ANY {
+                        return true;
+                    }
+                    consider(best, pack.ids[lane], p.t, p.u, p.v);
+                }
+            }
+        }
+        false
+    }
+}
+
+/// Primitives of any type, in leaf order, with their input indices.
+pub(crate) struct Prims<'a, P> {
+    pub prims: &'a [P],
+    pub ids: &'a [u32],
+}
+
+impl<P: Primitive> Leaves for Prims<'_, P> {
+    #[inline(always)]
+    fn test<X: Simd, S: Stats, const ANY: bool>(
+        &self,
+        _: X,
+        items: Range<usize>,
+        _: &RayData<X>,
+        ray: &Ray,
+        best: &mut Hit,
+        stats: &mut S,
+    ) -> bool {
+        for (prim, &id) in self.prims[items.clone()].iter().zip(&self.ids[items]) {
+            stats.prim_test();
+            if ANY {
+                if prim.occludes(ray, best.t) {
+                    return true;
+                }
+            } else if let Some(h) = prim.intersect(ray, best.t) {
+                consider(best, id, h.t, h.u, h.v);
+            }
+        }
+        false
+    }
+}
+
+/// Keeps the hit `(id, t, u, v)` if it beats `best` by the tie rule.
+#[inline(always)]
+fn consider(best: &mut Hit, id: u32, t: f32, u: f32, v: f32) {
+    if Hit::beats(t, id, best.t, best.prim) {
+        *best = Hit { prim: id, t, u, v };
+    }
+}
+
+/// The wide traversal core, shared by closest hit (`ANY = false`) and any hit (`ANY = true`).
+///
+/// Each visit tests all children of a node with one slab test. Closest hit: the children
+/// entered are sorted by entry distance; the nearest is visited next and the others pushed with
+/// their distances, farthest first, and skipped when popped if a hit closer than their entry
+/// (allowing [`SLAB_FAR_SCALE`], as the box test does) has been found meanwhile. Any hit: no
+/// sorting; the children are pushed in the node's precomputed order for the ray's octant, and
+/// the first hit ends the walk. Leaves are tested when popped, like nodes.
+#[inline(always)]
+pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
+    simd: X,
+    nodes: &[WideNode],
+    leaves: &L,
+    ray: &Ray,
+    stats: &mut S,
+) -> Option<Hit> {
+    let r = RayData::new(simd, ray);
+    let mut best = Hit {
+        prim: u32::MAX,
+        t: ray.t_max,
+        u: 0.0,
+        v: 0.0,
+    };
+    let mut stack = Stack::<(u32, f32), WIDE_STACK>::new();
+    let mut current = ChildRef::node(0);
+    loop {
+        stats.node_visit();
+        if !current.is_leaf() {
+            let node = &nodes[current.index()];
+            let (mask, t_entry) = kernels::slab8(simd, node, &r, best.t);
+            if mask != 0 {
+                if ANY {
+                    let order = node.order[r.octant];
+                    for k in (0..WIDTH).rev() {
+                        let i = (order >> (4 * k)) as usize & 15;
+                        if mask >> i & 1 != 0 {
+                            stack.push((node.children[i], 0.0));
+                        }
+                    }
+                } else if mask & (mask - 1) == 0 {
+                    current = node.child(mask.trailing_zeros() as usize);
+                    continue;
+                } else {
+                    // Insertion sort of the entered children, farthest first.
+                    let t_entry = simd.store8(t_entry);
+                    let mut hits = [(0u32, 0.0f32); WIDTH];
+                    let mut n = 0;
+                    let mut m = mask;
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        let e = (node.children[i], t_entry[i]);
+                        let mut j = n;
+                        while j > 0 && hits[j - 1].1 < e.1 {
+                            hits[j] = hits[j - 1];
+                            j -= 1;
+                        }
+                        hits[j] = e;
+                        n += 1;
+                    }
+                    for &h in &hits[..n - 1] {
+                        stack.push(h);
+                    }
+                    current = ChildRef(hits[n - 1].0);
+                    continue;
+                }
+            }
+        } else if leaves.test::<X, S, ANY>(simd, current.items(), &r, ray, &mut best, stats) {
+            return Some(best);
+        }
+        // Pop the next subtree that can still hold a hit no farther than the best so far.
+        loop {
+            let Some((child, t)) = stack.pop() else {
+                return (!ANY && best.prim != u32::MAX).then_some(best);
+            };
+            if ANY || t <= best.t * SLAB_FAR_SCALE {
+                current = ChildRef(child);
+                break;
             }
         }
     }

@@ -1,16 +1,39 @@
-//! The conformance kit for every preset, plus structural validation on the same scenes.
+//! The conformance kit for every preset and, for the wide layout, every set of kernels (the
+//! portable ones are forced here, so the fallback is tested on every CI run, AVX2 or not), plus
+//! structural validation on the same scenes.
 
-use rt_bvh::{Bvh, BvhParams};
+use rt_bvh::{Bvh, BvhParams, Kernels};
 use rt_core::conformance::{self, SCENES};
 use rt_core::{Accel, Sphere, Triangle};
 
-rt_core::conformance_tests!(sah, Bvh<Triangle>, BvhParams::sah());
+fn wide_with(kernels: Kernels) -> BvhParams {
+    BvhParams {
+        kernels: Some(kernels),
+        ..BvhParams::wide()
+    }
+}
+
+rt_core::conformance_tests!(wide, Bvh<Triangle>, BvhParams::wide());
+rt_core::conformance_tests!(wide_portable, Bvh<Triangle>, wide_with(Kernels::Portable));
+rt_core::conformance_tests!(wide_scalar, Bvh<Triangle>, wide_with(Kernels::Scalar));
+rt_core::conformance_tests!(
+    wide_sequential,
+    Bvh<Triangle>,
+    BvhParams {
+        parallel: false,
+        ..BvhParams::wide()
+    }
+);
+rt_core::conformance_tests!(binary, Bvh<Triangle>, BvhParams::sah());
 rt_core::conformance_tests!(median, Bvh<Triangle>, BvhParams::median());
 rt_core::conformance_tests!(middle, Bvh<Triangle>, BvhParams::middle());
 
 #[test]
-fn spheres_sah() {
+fn spheres() {
     conformance::check_random_spheres::<Bvh<Sphere>>(&BvhParams::sah());
+    // Spheres are no triangles: the wide tree keeps them in primitive leaves.
+    conformance::check_random_spheres::<Bvh<Sphere>>(&BvhParams::wide());
+    conformance::check_random_spheres::<Bvh<Sphere>>(&wide_with(Kernels::Portable));
 }
 
 #[test]

@@ -1,0 +1,389 @@
+//! The wide layout's inner kernels: one slab test for all eight children of a [`WideNode`] and
+//! one ray–triangle test for the four lanes of a [`TriPack`].
+//!
+//! They are written once, over the small [`Simd`] trait: [`Portable`] implements it with plain
+//! arrays (which LLVM turns into SSE2 or NEON code for the baseline target), and `simd::Avx2`
+//! with AVX2 intrinsics. Both compute every lane with the same operations, in the same order, as
+//! the scalar functions they mirror ([`rt_core::Aabb::intersect`],
+//! [`rt_core::Triangle::intersect_sheared`], [`rt_core::moller_trumbore_edges`]): no fused
+//! multiply-adds, IEEE division, comparisons with the same NaN behaviour. So the results are the
+//! same bits, and the tests compare them exactly.
+
+use crate::node::{PACK, TriPack, WIDTH, WideNode};
+use rt_core::{Ray, SLAB_FAR_SCALE, Shear};
+
+/// The lane operations the kernels need: eight-lane vectors for node boxes, four-lane vectors
+/// and masks for triangle packs. Comparisons follow Rust's operators (false when a lane is NaN).
+pub(crate) trait Simd: Copy {
+    /// Eight `f32` lanes.
+    type F8: Copy;
+    /// Four `f32` lanes.
+    type F4: Copy;
+    /// A four-lane comparison result.
+    type M4: Copy;
+
+    fn load8(self, v: &[f32; 8]) -> Self::F8;
+    fn splat8(self, x: f32) -> Self::F8;
+    fn sub8(self, a: Self::F8, b: Self::F8) -> Self::F8;
+    fn mul8(self, a: Self::F8, b: Self::F8) -> Self::F8;
+    /// Per lane `if a > b { a } else { b }` (so `b` where `a` is NaN).
+    fn max8(self, a: Self::F8, b: Self::F8) -> Self::F8;
+    /// Per lane `if a < b { a } else { b }` (so `b` where `a` is NaN).
+    fn min8(self, a: Self::F8, b: Self::F8) -> Self::F8;
+    /// Bit `i` set when `a[i] <= b[i]`.
+    fn le_bits8(self, a: Self::F8, b: Self::F8) -> u32;
+    fn store8(self, a: Self::F8) -> [f32; 8];
+
+    fn load4(self, v: &[f32; 4]) -> Self::F4;
+    fn splat4(self, x: f32) -> Self::F4;
+    fn add4(self, a: Self::F4, b: Self::F4) -> Self::F4;
+    fn sub4(self, a: Self::F4, b: Self::F4) -> Self::F4;
+    fn mul4(self, a: Self::F4, b: Self::F4) -> Self::F4;
+    fn div4(self, a: Self::F4, b: Self::F4) -> Self::F4;
+    fn eq4(self, a: Self::F4, b: Self::F4) -> Self::M4;
+    /// `a != b` and neither is NaN.
+    fn ne_ordered4(self, a: Self::F4, b: Self::F4) -> Self::M4;
+    fn lt4(self, a: Self::F4, b: Self::F4) -> Self::M4;
+    fn gt4(self, a: Self::F4, b: Self::F4) -> Self::M4;
+    fn le4(self, a: Self::F4, b: Self::F4) -> Self::M4;
+    fn ge4(self, a: Self::F4, b: Self::F4) -> Self::M4;
+    fn and4(self, a: Self::M4, b: Self::M4) -> Self::M4;
+    fn or4(self, a: Self::M4, b: Self::M4) -> Self::M4;
+    /// `!a & b`.
+    fn andnot4(self, a: Self::M4, b: Self::M4) -> Self::M4;
+    /// Bit `i` set when lane `i` of the mask is.
+    fn bits4(self, m: Self::M4) -> u32;
+    fn store4(self, a: Self::F4) -> [f32; 4];
+}
+
+/// The kernels on plain arrays, for any target.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Portable;
+
+#[inline(always)]
+fn map<const N: usize, T: Copy, U>(a: [T; N], b: [T; N], f: impl Fn(T, T) -> U) -> [U; N] {
+    std::array::from_fn(|i| f(a[i], b[i]))
+}
+
+#[inline(always)]
+fn bits<const N: usize>(m: [bool; N]) -> u32 {
+    m.iter()
+        .enumerate()
+        .fold(0, |acc, (i, &b)| acc | (b as u32) << i)
+}
+
+impl Simd for Portable {
+    type F8 = [f32; 8];
+    type F4 = [f32; 4];
+    type M4 = [bool; 4];
+
+    #[inline(always)]
+    fn load8(self, v: &[f32; 8]) -> [f32; 8] {
+        *v
+    }
+    #[inline(always)]
+    fn splat8(self, x: f32) -> [f32; 8] {
+        [x; 8]
+    }
+    #[inline(always)]
+    fn sub8(self, a: [f32; 8], b: [f32; 8]) -> [f32; 8] {
+        map(a, b, |a, b| a - b)
+    }
+    #[inline(always)]
+    fn mul8(self, a: [f32; 8], b: [f32; 8]) -> [f32; 8] {
+        map(a, b, |a, b| a * b)
+    }
+    #[inline(always)]
+    fn max8(self, a: [f32; 8], b: [f32; 8]) -> [f32; 8] {
+        map(a, b, |a, b| if a > b { a } else { b })
+    }
+    #[inline(always)]
+    fn min8(self, a: [f32; 8], b: [f32; 8]) -> [f32; 8] {
+        map(a, b, |a, b| if a < b { a } else { b })
+    }
+    #[inline(always)]
+    fn le_bits8(self, a: [f32; 8], b: [f32; 8]) -> u32 {
+        bits(map(a, b, |a, b| a <= b))
+    }
+    #[inline(always)]
+    fn store8(self, a: [f32; 8]) -> [f32; 8] {
+        a
+    }
+    #[inline(always)]
+    fn load4(self, v: &[f32; 4]) -> [f32; 4] {
+        *v
+    }
+    #[inline(always)]
+    fn splat4(self, x: f32) -> [f32; 4] {
+        [x; 4]
+    }
+    #[inline(always)]
+    fn add4(self, a: [f32; 4], b: [f32; 4]) -> [f32; 4] {
+        map(a, b, |a, b| a + b)
+    }
+    #[inline(always)]
+    fn sub4(self, a: [f32; 4], b: [f32; 4]) -> [f32; 4] {
+        map(a, b, |a, b| a - b)
+    }
+    #[inline(always)]
+    fn mul4(self, a: [f32; 4], b: [f32; 4]) -> [f32; 4] {
+        map(a, b, |a, b| a * b)
+    }
+    #[inline(always)]
+    fn div4(self, a: [f32; 4], b: [f32; 4]) -> [f32; 4] {
+        map(a, b, |a, b| a / b)
+    }
+    #[inline(always)]
+    fn eq4(self, a: [f32; 4], b: [f32; 4]) -> [bool; 4] {
+        map(a, b, |a, b| a == b)
+    }
+    #[inline(always)]
+    fn ne_ordered4(self, a: [f32; 4], b: [f32; 4]) -> [bool; 4] {
+        map(a, b, |a, b| a != b && !a.is_nan() && !b.is_nan())
+    }
+    #[inline(always)]
+    fn lt4(self, a: [f32; 4], b: [f32; 4]) -> [bool; 4] {
+        map(a, b, |a, b| a < b)
+    }
+    #[inline(always)]
+    fn gt4(self, a: [f32; 4], b: [f32; 4]) -> [bool; 4] {
+        map(a, b, |a, b| a > b)
+    }
+    #[inline(always)]
+    fn le4(self, a: [f32; 4], b: [f32; 4]) -> [bool; 4] {
+        map(a, b, |a, b| a <= b)
+    }
+    #[inline(always)]
+    fn ge4(self, a: [f32; 4], b: [f32; 4]) -> [bool; 4] {
+        map(a, b, |a, b| a >= b)
+    }
+    #[inline(always)]
+    fn and4(self, a: [bool; 4], b: [bool; 4]) -> [bool; 4] {
+        map(a, b, |a, b| a & b)
+    }
+    #[inline(always)]
+    fn or4(self, a: [bool; 4], b: [bool; 4]) -> [bool; 4] {
+        map(a, b, |a, b| a | b)
+    }
+    #[inline(always)]
+    fn andnot4(self, a: [bool; 4], b: [bool; 4]) -> [bool; 4] {
+        map(a, b, |a, b| !a & b)
+    }
+    #[inline(always)]
+    fn bits4(self, m: [bool; 4]) -> u32 {
+        bits(m)
+    }
+    #[inline(always)]
+    fn store4(self, a: [f32; 4]) -> [f32; 4] {
+        a
+    }
+}
+
+/// What the kernels need of a ray, computed once per ray: broadcast into vectors where the
+/// kernels use it lane-wise.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct RayData<S: Simd> {
+    pub origin: [S::F8; 3],
+    pub inv_dir: [S::F8; 3],
+    pub t_min8: S::F8,
+    /// Per axis, the [`WideNode::bounds`] row of the near and of the far slab plane (the minimum
+    /// row for a positive reciprocal direction, the maximum row for a negative one, `-0`
+    /// included).
+    pub near: [usize; 3],
+    pub far: [usize; 3],
+    /// Bit `a` set when the direction is negative along axis `a`.
+    pub octant: usize,
+    pub shear: Shear,
+    /// The origin along the shear's axes kx, ky, kz, the shear factors, and `t_min`, as
+    /// four-lane vectors for the watertight test.
+    pub o4: [S::F4; 3],
+    pub s4: [S::F4; 3],
+    /// The origin and direction along x, y, z, for Möller–Trumbore.
+    pub origin4: [S::F4; 3],
+    pub dir4: [S::F4; 3],
+    pub t_min4: S::F4,
+}
+
+impl<S: Simd> RayData<S> {
+    #[inline(always)]
+    pub fn new(simd: S, ray: &Ray) -> Self {
+        let mut near = [0; 3];
+        let mut far = [0; 3];
+        let mut octant = 0;
+        for a in 0..3 {
+            let neg = ray.inv_dir[a].is_sign_negative();
+            near[a] = a + 3 * neg as usize;
+            far[a] = a + 3 * (!neg) as usize;
+            octant |= (neg as usize) << a;
+        }
+        let shear = Shear::new(ray.dir);
+        let (o, d, inv) = (ray.origin, ray.dir, ray.inv_dir);
+        // Written out lane by lane: closures passed to `array::map` are not inlined into the
+        // AVX2 entry point, and the broadcasts then run as calls (measured: a third of the cost
+        // of a ray that misses the root).
+        let (s8, s4) = (|x| simd.splat8(x), |x| simd.splat4(x));
+        Self {
+            origin: [s8(o.x), s8(o.y), s8(o.z)],
+            inv_dir: [s8(inv.x), s8(inv.y), s8(inv.z)],
+            t_min8: s8(ray.t_min),
+            near,
+            far,
+            octant,
+            shear,
+            o4: [s4(o[shear.kx]), s4(o[shear.ky]), s4(o[shear.kz])],
+            s4: [s4(shear.sx), s4(shear.sy), s4(shear.sz)],
+            origin4: [s4(o.x), s4(o.y), s4(o.z)],
+            dir4: [s4(d.x), s4(d.y), s4(d.z)],
+            t_min4: s4(ray.t_min),
+        }
+    }
+}
+
+/// The slab test of all eight children against `[t_min, t_max]`: a bit mask of the children
+/// entered and each child's entry distance.
+///
+/// Lane by lane this is [`rt_core::Aabb::intersect`]: the near and far planes chosen by the sign
+/// of the reciprocal direction, `(plane - origin) · inv_dir`, the interval narrowed by
+/// comparisons that ignore NaN (an origin in a face plane with a zero direction component), the
+/// far end widened by [`SLAB_FAR_SCALE`]. Empty lanes (`+inf` minimum, `-inf` maximum) never pass.
+#[inline(always)]
+pub(crate) fn slab8<S: Simd>(s: S, node: &WideNode, r: &RayData<S>, t_max: f32) -> (u32, S::F8) {
+    let mut t0 = r.t_min8;
+    let mut t1 = s.splat8(t_max);
+    for a in 0..3 {
+        let tn = s.mul8(
+            s.sub8(s.load8(&node.bounds[r.near[a]]), r.origin[a]),
+            r.inv_dir[a],
+        );
+        let tf = s.mul8(
+            s.sub8(s.load8(&node.bounds[r.far[a]]), r.origin[a]),
+            r.inv_dir[a],
+        );
+        t0 = s.max8(tn, t0);
+        t1 = s.min8(tf, t1);
+    }
+    let mask = s.le_bits8(t0, s.mul8(t1, s.splat8(SLAB_FAR_SCALE)));
+    (mask, t0)
+}
+
+/// The hits of one pack: a mask of the lanes hit within `[t_min, t_max]`, and per lane `t` and
+/// the surface coordinates `u`, `v` (meaningful in the masked lanes only).
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct PackHits<S: Simd> {
+    pub mask: u32,
+    /// Lanes whose edge functions were exactly zero: the watertight test must redo them in
+    /// double precision (see [`watertight4`]).
+    pub redo: u32,
+    pub t: S::F4,
+    pub u: S::F4,
+    pub v: S::F4,
+}
+
+/// The watertight test (Woop, Benthin & Wald 2013) on four triangles at once, lane by lane the
+/// operations of [`rt_core::Triangle::intersect_sheared`].
+///
+/// The scalar test recomputes all three edge functions in `f64` when one of them is exactly
+/// zero; lanes where that happens are returned in `redo` and left out of `mask`, and the caller
+/// runs the scalar test on them (a ray through an edge or a vertex, rare except on lattices).
+/// Unused lanes hold NaN, which gives NaN edge functions: never zero, always rejected.
+#[inline(always)]
+pub(crate) fn watertight4<S: Simd>(s: S, p: &TriPack, r: &RayData<S>, t_max: f32) -> PackHits<S> {
+    let Shear { kx, ky, kz, .. } = r.shear;
+    let [sx, sy, sz] = r.s4;
+    let [ox, oy, oz] = r.o4;
+    // Vertex k relative to the origin, sheared: (x - sx·z, y - sy·z) and z.
+    let vertex = |k: usize| {
+        let x = s.sub4(s.load4(&p.rows[3 * k + kx]), ox);
+        let y = s.sub4(s.load4(&p.rows[3 * k + ky]), oy);
+        let z = s.sub4(s.load4(&p.rows[3 * k + kz]), oz);
+        (s.sub4(x, s.mul4(sx, z)), s.sub4(y, s.mul4(sy, z)), z)
+    };
+    let (ax, ay, az) = vertex(0);
+    let (bx, by, bz) = vertex(1);
+    let (cx, cy, cz) = vertex(2);
+    let u = s.sub4(s.mul4(cx, by), s.mul4(cy, bx));
+    let v = s.sub4(s.mul4(ax, cy), s.mul4(ay, cx));
+    let w = s.sub4(s.mul4(bx, ay), s.mul4(by, ax));
+    let zero4 = s.splat4(0.0);
+    let zero = s.or4(s.or4(s.eq4(u, zero4), s.eq4(v, zero4)), s.eq4(w, zero4));
+    let neg = s.or4(s.or4(s.lt4(u, zero4), s.lt4(v, zero4)), s.lt4(w, zero4));
+    let pos = s.or4(s.or4(s.gt4(u, zero4), s.gt4(v, zero4)), s.gt4(w, zero4));
+    let det = s.add4(s.add4(u, v), w);
+    let inv = s.div4(s.splat4(1.0), det);
+    let t_num = s.add4(
+        s.add4(s.mul4(u, s.mul4(sz, az)), s.mul4(v, s.mul4(sz, bz))),
+        s.mul4(w, s.mul4(sz, cz)),
+    );
+    let t = s.mul4(t_num, inv);
+    let in_range = s.and4(s.ge4(t, r.t_min4), s.le4(t, s.splat4(t_max)));
+    let ok = s.andnot4(
+        s.and4(neg, pos),
+        s.and4(s.ne_ordered4(det, zero4), in_range),
+    );
+    let redo = s.bits4(zero);
+    PackHits {
+        mask: s.bits4(ok) & !redo,
+        redo,
+        t,
+        u: s.mul4(v, inv),
+        v: s.mul4(w, inv),
+    }
+}
+
+/// Möller–Trumbore on four triangles at once from their stored first vertex and edges, lane by
+/// lane the operations of [`rt_core::moller_trumbore_edges`]. Unused lanes hold NaN and are
+/// rejected.
+#[inline(always)]
+pub(crate) fn moller_trumbore4<S: Simd>(
+    s: S,
+    p: &TriPack,
+    r: &RayData<S>,
+    t_max: f32,
+) -> PackHits<S> {
+    let row = |k: usize| s.load4(&p.rows[k]);
+    let [dx, dy, dz] = r.dir4;
+    let [ox, oy, oz] = r.origin4;
+    let (v0x, v0y, v0z) = (row(0), row(1), row(2));
+    let (e1x, e1y, e1z) = (row(3), row(4), row(5));
+    let (e2x, e2y, e2z) = (row(6), row(7), row(8));
+    let cross = |ay, az, by, bz| s.sub4(s.mul4(ay, bz), s.mul4(by, az));
+    let dot =
+        |ax, ay, az, bx, by, bz| s.add4(s.add4(s.mul4(ax, bx), s.mul4(ay, by)), s.mul4(az, bz));
+    // p = d × e2 and q = s × e1, as glam's `Vec3::cross` evaluates them.
+    let (px, py, pz) = (
+        cross(dy, dz, e2y, e2z),
+        cross(dz, dx, e2z, e2x),
+        cross(dx, dy, e2x, e2y),
+    );
+    let det = dot(e1x, e1y, e1z, px, py, pz);
+    let inv = s.div4(s.splat4(1.0), det);
+    let (sx, sy, sz) = (s.sub4(ox, v0x), s.sub4(oy, v0y), s.sub4(oz, v0z));
+    let u = s.mul4(dot(sx, sy, sz, px, py, pz), inv);
+    let (qx, qy, qz) = (
+        cross(sy, sz, e1y, e1z),
+        cross(sz, sx, e1z, e1x),
+        cross(sx, sy, e1x, e1y),
+    );
+    let v = s.mul4(dot(dx, dy, dz, qx, qy, qz), inv);
+    let t = s.mul4(dot(e2x, e2y, e2z, qx, qy, qz), inv);
+    let (zero, one) = (s.splat4(0.0), s.splat4(1.0));
+    let ok = s.and4(
+        s.and4(
+            s.ne_ordered4(det, zero),
+            s.and4(s.ge4(u, zero), s.le4(u, one)),
+        ),
+        s.and4(
+            s.and4(s.ge4(v, zero), s.le4(s.add4(u, v), one)),
+            s.and4(s.ge4(t, r.t_min4), s.le4(t, s.splat4(t_max))),
+        ),
+    );
+    PackHits {
+        mask: s.bits4(ok),
+        redo: 0,
+        t,
+        u,
+        v,
+    }
+}
+
+const _: () = assert!(WIDTH == 8 && PACK == 4);

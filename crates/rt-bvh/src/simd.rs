@@ -1,0 +1,183 @@
+//! Runtime CPU dispatch for the wide layout, its AVX2 kernels and its traversal stack: the only
+//! module of the crate allowed `unsafe`.
+//!
+//! - [`Avx2`] implements the kernels' [`Simd`] operations with AVX2 intrinsics. An intrinsic
+//!   needs the CPU feature it is compiled for, so each call sits in an `unsafe` block; they are
+//!   sound because an `Avx2` value can only be made by [`Avx2::detect`], after the CPU reported
+//!   AVX2 and FMA. The wide traversal (`traverse::wide`) is compiled once inside [`wide_avx2`]
+//!   (a `#[target_feature(enable = "avx2,fma")]` function, where the intrinsics inline) and once
+//!   for the baseline target with [`Portable`]. A plain `cargo build` without `RUSTFLAGS`
+//!   therefore runs AVX2 code on CPUs that have it and baseline code elsewhere (SSE2 on x86-64;
+//!   aarch64 compiles the portable kernels only).
+//! - [`Stack`] leaves its slots uninitialised, so a ray does not pay for zeroing hundreds of
+//!   entries it will never use; it reads a slot only after writing it.
+#![allow(unsafe_code)]
+
+use crate::kernels::{Portable, Simd};
+use crate::node::WideNode;
+use crate::traverse::{Leaves, wide};
+use rt_core::{Hit, Ray, Stats};
+use std::mem::MaybeUninit;
+
+/// The instruction set the wide traversal runs with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(crate) enum Isa {
+    #[cfg(target_arch = "x86_64")]
+    Avx2(Avx2),
+    Portable,
+}
+
+impl Isa {
+    /// AVX2 with FMA when this CPU has both, else `None`.
+    pub fn avx2() -> Option<Isa> {
+        #[cfg(target_arch = "x86_64")]
+        if let Some(a) = Avx2::detect() {
+            return Some(Isa::Avx2(a));
+        }
+        None
+    }
+}
+
+/// Runs the wide traversal with the instruction set `isa`.
+#[inline(always)]
+pub(crate) fn dispatch<L: Leaves, S: Stats, const ANY: bool>(
+    isa: Isa,
+    nodes: &[WideNode],
+    leaves: &L,
+    ray: &Ray,
+    stats: &mut S,
+) -> Option<Hit> {
+    match isa {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: an `Avx2` value exists only if `Avx2::detect` found AVX2 and FMA on this CPU,
+        // which is all `wide_avx2` requires.
+        Isa::Avx2(simd) => unsafe { wide_avx2::<L, S, ANY>(simd, nodes, leaves, ray, stats) },
+        Isa::Portable => wide::<Portable, L, S, ANY>(Portable, nodes, leaves, ray, stats),
+    }
+}
+
+/// The wide traversal, compiled with AVX2 and FMA enabled so the intrinsics inline.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn wide_avx2<L: Leaves, S: Stats, const ANY: bool>(
+    simd: Avx2,
+    nodes: &[WideNode],
+    leaves: &L,
+    ray: &Ray,
+    stats: &mut S,
+) -> Option<Hit> {
+    wide::<Avx2, L, S, ANY>(simd, nodes, leaves, ray, stats)
+}
+
+#[cfg(target_arch = "x86_64")]
+pub(crate) use x86::Avx2;
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use super::Simd;
+    use std::arch::x86_64::*;
+
+    /// Proof that this CPU runs AVX2 and FMA; the kernels' operations as AVX2 intrinsics.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub(crate) struct Avx2(());
+
+    impl Avx2 {
+        /// `Some` when the CPU has AVX2 and FMA; the only way to make an `Avx2`.
+        pub fn detect() -> Option<Self> {
+            (is_x86_feature_detected!("avx2") && is_x86_feature_detected!("fma"))
+                .then_some(Self(()))
+        }
+    }
+
+    /// An operation of [`Simd`] as one intrinsic call.
+    macro_rules! op {
+        ($name:ident($($arg:ident: $ty:ty),*) -> $ret:ty, $body:expr) => {
+            #[inline(always)]
+            fn $name(self, $($arg: $ty),*) -> $ret {
+                // SAFETY: `self` is an `Avx2`, which exists only after `Avx2::detect` found AVX2
+                // and FMA on this CPU: every intrinsic used here needs at most AVX2. Loads and
+                // stores go through references to arrays of the vector's exact size.
+                unsafe { $body }
+            }
+        };
+    }
+
+    impl Simd for Avx2 {
+        type F8 = __m256;
+        type F4 = __m128;
+        type M4 = __m128;
+
+        op!(load8(v: &[f32; 8]) -> __m256, _mm256_loadu_ps(v.as_ptr()));
+        op!(splat8(x: f32) -> __m256, _mm256_set1_ps(x));
+        op!(sub8(a: __m256, b: __m256) -> __m256, _mm256_sub_ps(a, b));
+        op!(mul8(a: __m256, b: __m256) -> __m256, _mm256_mul_ps(a, b));
+        // `maxps a, b` is `a > b ? a : b`, NaN in `a` giving `b`: exactly the slab test's `if`.
+        op!(max8(a: __m256, b: __m256) -> __m256, _mm256_max_ps(a, b));
+        op!(min8(a: __m256, b: __m256) -> __m256, _mm256_min_ps(a, b));
+        op!(le_bits8(a: __m256, b: __m256) -> u32,
+            _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(a, b)) as u32);
+        op!(store8(a: __m256) -> [f32; 8], {
+            let mut out = [0.0f32; 8];
+            _mm256_storeu_ps(out.as_mut_ptr(), a);
+            out
+        });
+        op!(load4(v: &[f32; 4]) -> __m128, _mm_loadu_ps(v.as_ptr()));
+        op!(splat4(x: f32) -> __m128, _mm_set1_ps(x));
+        op!(add4(a: __m128, b: __m128) -> __m128, _mm_add_ps(a, b));
+        op!(sub4(a: __m128, b: __m128) -> __m128, _mm_sub_ps(a, b));
+        op!(mul4(a: __m128, b: __m128) -> __m128, _mm_mul_ps(a, b));
+        op!(div4(a: __m128, b: __m128) -> __m128, _mm_div_ps(a, b));
+        op!(eq4(a: __m128, b: __m128) -> __m128, _mm_cmp_ps::<_CMP_EQ_OQ>(a, b));
+        op!(ne_ordered4(a: __m128, b: __m128) -> __m128, _mm_cmp_ps::<_CMP_NEQ_OQ>(a, b));
+        op!(lt4(a: __m128, b: __m128) -> __m128, _mm_cmp_ps::<_CMP_LT_OQ>(a, b));
+        op!(gt4(a: __m128, b: __m128) -> __m128, _mm_cmp_ps::<_CMP_GT_OQ>(a, b));
+        op!(le4(a: __m128, b: __m128) -> __m128, _mm_cmp_ps::<_CMP_LE_OQ>(a, b));
+        op!(ge4(a: __m128, b: __m128) -> __m128, _mm_cmp_ps::<_CMP_GE_OQ>(a, b));
+        op!(and4(a: __m128, b: __m128) -> __m128, _mm_and_ps(a, b));
+        op!(or4(a: __m128, b: __m128) -> __m128, _mm_or_ps(a, b));
+        op!(andnot4(a: __m128, b: __m128) -> __m128, _mm_andnot_ps(a, b));
+        op!(bits4(m: __m128) -> u32, _mm_movemask_ps(m) as u32);
+        op!(store4(a: __m128) -> [f32; 4], {
+            let mut out = [0.0f32; 4];
+            _mm_storeu_ps(out.as_mut_ptr(), a);
+            out
+        });
+    }
+}
+
+/// A fixed-capacity stack whose slots start uninitialised.
+pub(crate) struct Stack<T: Copy, const N: usize> {
+    items: [MaybeUninit<T>; N],
+    len: usize,
+}
+
+impl<T: Copy, const N: usize> Stack<T, N> {
+    #[inline(always)]
+    pub fn new() -> Self {
+        Self {
+            items: [const { MaybeUninit::uninit() }; N],
+            len: 0,
+        }
+    }
+
+    /// Pushes `v`.
+    ///
+    /// # Panics
+    /// When the stack is full (the builder bounds the depth so that it never is).
+    #[inline(always)]
+    pub fn push(&mut self, v: T) {
+        self.items[self.len] = MaybeUninit::new(v);
+        self.len += 1;
+    }
+
+    #[inline(always)]
+    pub fn pop(&mut self) -> Option<T> {
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        // SAFETY: slots `0..len` (before the decrement) were each written by `push`, and `len`
+        // only grows through `push`, so slot `len` holds a value written by it.
+        Some(unsafe { self.items[self.len].assume_init() })
+    }
+}

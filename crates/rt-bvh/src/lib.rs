@@ -288,9 +288,13 @@ impl<P: Primitive> Bvh<P> {
     /// The query core shared by [`Accel::intersect_with`] and [`Accel::occluded_with`].
     #[inline(always)]
     fn query<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        // Outside the precondition (NaN, huge origins, ...): answer at once, walk nothing.
+        if !ray.is_valid() {
+            return None;
+        }
         match self.layout {
             Layout::Binary => self.traverse_binary::<S, ANY>(ray, stats),
-            Layout::Wide if self.wide.is_empty() || !ray.is_valid() => None,
+            Layout::Wide if self.wide.is_empty() => None,
             Layout::Wide => {
                 let (nodes, isa) = (&self.wide[..], self.isa);
                 match (self.test, self.kernels) {

@@ -31,6 +31,10 @@ impl<P: Primitive> Accel for BruteForce<P> {
     }
 
     fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        // Outside the precondition (NaN, huge origins, ...): no answer is meaningful.
+        if !ray.is_valid() {
+            return None;
+        }
         let mut best: Option<Hit> = None;
         let mut t_max = ray.t_max;
         for (p, &id) in self.prims.iter().zip(&self.ids) {
@@ -52,6 +56,9 @@ impl<P: Primitive> Accel for BruteForce<P> {
     }
 
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+        if !ray.is_valid() {
+            return false;
+        }
         self.prims.iter().any(|p| {
             stats.prim_test();
             p.occludes(ray, ray.t_max)

@@ -38,6 +38,8 @@ pub struct Mismatch {
     pub expected: Option<Hit>,
     /// What the structure answered.
     pub got: Option<Hit>,
+    /// More about the failure, when there is more to say (else empty).
+    pub detail: Box<str>,
 }
 
 impl fmt::Display for Mismatch {
@@ -50,12 +52,17 @@ impl fmt::Display for Mismatch {
             self.ray.to_line(),
             self.expected,
             self.got
-        )
+        )?;
+        if !self.detail.is_empty() {
+            write!(f, "\n  {}", self.detail)?;
+        }
+        Ok(())
     }
 }
 
 /// Compares `accel` with `reference` on every valid ray (see [`Ray::is_valid`]), returning the
-/// first disagreement. Invalid rays are traced too, and only have to return.
+/// first disagreement. Invalid rays are traced too, and must return at once: no hit, no
+/// primitive test, at most one node visit per query.
 ///
 /// # Errors
 /// The first [`Mismatch`].
@@ -66,9 +73,28 @@ pub fn compare_rays<A: Accel>(
 ) -> Result<(), Mismatch> {
     for ray in rays {
         if !ray.is_valid() {
-            // Outside the trait's precondition the answer is unspecified, but the structure must
-            // still return: no panic, no endless loop.
-            let _ = (accel.intersect(ray), accel.occluded(ray));
+            // Outside the trait's precondition: the structure must answer at once, with no hit,
+            // no primitive test and at most the root visited by each query (a NaN direction or
+            // an origin at 10³⁰ must not walk the whole tree).
+            let mut c = Counters::default();
+            let hit = accel.intersect_with(ray, &mut c);
+            let occluded = accel.occluded_with(ray, &mut c);
+            if hit.is_some() || occluded || c.prim_tests > 0 || c.node_visits > 2 {
+                return Err(Mismatch {
+                    query: "invalid ray",
+                    ray: *ray,
+                    expected: None,
+                    got: hit,
+                    detail: format!(
+                        "must return at once; got a hit: {}, occluded: {occluded}, {} node visits \
+                         and {} primitive tests over both queries",
+                        hit.is_some(),
+                        c.node_visits,
+                        c.prim_tests
+                    )
+                    .into(),
+                });
+            }
             continue;
         }
         let expected = reference.intersect(ray);
@@ -79,6 +105,7 @@ pub fn compare_rays<A: Accel>(
                 ray: *ray,
                 expected,
                 got,
+                detail: Box::default(),
             });
         }
         let counted = accel.intersect_with(ray, &mut Counters::default());
@@ -88,6 +115,7 @@ pub fn compare_rays<A: Accel>(
                 ray: *ray,
                 expected: got,
                 got: counted,
+                detail: Box::default(),
             });
         }
         let occluded = accel.occluded(ray);
@@ -105,6 +133,7 @@ pub fn compare_rays<A: Accel>(
                 ray: *ray,
                 expected: as_hit(expected.is_some()),
                 got: as_hit(occluded),
+                detail: Box::default(),
             });
         }
     }
@@ -803,9 +832,9 @@ fn spanning_triangles() -> Scene {
     Scene { triangles, rays }
 }
 
-/// Rays a caller should not send (`Ray::is_valid` is false): NaN or infinite origins, zero,
-/// infinite or NaN directions, empty or NaN intervals. Their answers are unspecified (structures
-/// do not check rays on the hot path), but a structure must return: no panic, no endless loop.
+/// Rays a caller should not send (`Ray::is_valid` is false): NaN, infinite or huge origins
+/// (10³⁰, beyond `Ray::MAX_ORIGIN`), zero, infinite or NaN directions, empty or NaN intervals.
+/// A structure must answer them at once: no hit, no primitive tested, at most one node visited.
 fn invalid_rays() -> Scene {
     let mut rng = Rng::new(15);
     let triangles = soup(&mut rng, 300, Vec3::splat(-1.0), Vec3::ONE, 0.3);
@@ -820,6 +849,10 @@ fn invalid_rays() -> Scene {
         Ray::with_interval(Vec3::splat(-2.0), Vec3::ONE, 3.0, 1.0),
         Ray::with_interval(Vec3::splat(-2.0), Vec3::ONE, nan, nan),
         Ray::with_interval(Vec3::splat(-2.0), Vec3::ONE, -inf, inf),
+        Ray::new(Vec3::splat(1e30), -Vec3::ONE),
+        Ray::new(Vec3::new(0.0, 0.0, 1e30), -Vec3::Z),
+        Ray::new(Vec3::new(0.0, -Ray::MAX_ORIGIN * 2.0, 0.0), Vec3::Y),
+        Ray::new(Vec3::ZERO, Vec3::splat(nan)),
     ];
     Scene { triangles, rays }
 }
@@ -946,7 +979,9 @@ fn exponential_chain() -> Scene {
     for _ in 0..100 {
         let o = Vec3::new(0.0, rng.range(-0.5, 0.5), rng.range(-0.5, 0.5));
         rays.push(Ray::new(o, Vec3::X));
-        let far = Vec3::new(1.5f32.powi(121), o.y, o.z);
+        // From far out along the chain (as far as a valid origin goes, `Ray::MAX_ORIGIN`),
+        // back towards the start: the triangles beyond are hit by the rays along +x.
+        let far = Vec3::new(Ray::MAX_ORIGIN, o.y, o.z);
         rays.push(Ray::new(far, -Vec3::X));
         rays.push(Ray::new(o, Vec3::new(1.0, rng.range(-1e-9, 1e-9), 0.0)));
     }

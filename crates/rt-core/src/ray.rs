@@ -58,18 +58,28 @@ impl Ray {
         self.origin + t * self.dir
     }
 
-    /// Whether origin, direction and interval are usable: all finite except `t_max`, which may be
-    /// `+inf`; a non-zero direction; and `0 <= t_min <= t_max`.
+    /// The largest origin coordinate, in magnitude, of a valid ray: 2⁴⁰ (about 1.1·10¹²).
     ///
-    /// Structures do not check this on every ray (it would cost time on the hot path); loaders of
-    /// ray files and ray generators do.
+    /// Beyond it the primitive tests overflow `f32` for geometry at ordinary scale (the
+    /// watertight test's `t` is cubic in the coordinates relative to the origin: about
+    /// `24·|v - o|³` must stay below `f32::MAX`), and the boxes of any scene smaller than the
+    /// spacing of floats there all look alike, so a ray could only walk every node and answer
+    /// nothing meaningful.
+    pub const MAX_ORIGIN: f32 = (1u64 << 40) as f32;
+
+    /// Whether origin, direction and interval are usable: origin coordinates finite and at most
+    /// [`Ray::MAX_ORIGIN`] in magnitude; a finite, non-zero direction; `0 <= t_min <= t_max`
+    /// with `t_min` finite (`t_max` may be `+inf`).
+    ///
+    /// Every structure checks this first and answers an invalid ray at once, with no hit and
+    /// no node visited: a NaN direction or an origin at 10³⁰ must not walk the whole tree.
+    #[inline]
     pub fn is_valid(&self) -> bool {
-        self.origin.is_finite()
+        self.origin.abs().cmple(Vec3::splat(Self::MAX_ORIGIN)).all()
             && self.dir.is_finite()
             && self.dir != Vec3::ZERO
-            && self.t_min.is_finite()
             && self.t_min >= 0.0
-            && !self.t_max.is_nan()
+            && self.t_min.is_finite()
             && self.t_min <= self.t_max
     }
 

@@ -31,7 +31,8 @@ impl<P: Primitive> HGrid<P> {
     /// The nested walk. `ANY = false` finds the closest hit; `ANY = true` returns at the first.
     #[inline(always)]
     pub(crate) fn walk<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        if self.refs.is_empty() {
+        // Outside the precondition (NaN, huge origins, ...): answer at once, walk nothing.
+        if self.refs.is_empty() || !ray.is_valid() {
             return None;
         }
         let top = &self.levels[0];

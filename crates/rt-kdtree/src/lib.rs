@@ -340,6 +340,10 @@ impl<P: Primitive> Accel for KdTree<P> {
 
     #[inline]
     fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        // Outside the precondition (NaN, huge origins, ...): answer at once, walk nothing.
+        if !ray.is_valid() {
+            return None;
+        }
         match self.traversal {
             Traversal::Stack => self.traverse_stack::<S, false>(ray, stats),
             Traversal::Restart => self.traverse_restart::<S, false>(ray, stats),
@@ -348,6 +352,9 @@ impl<P: Primitive> Accel for KdTree<P> {
 
     #[inline]
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+        if !ray.is_valid() {
+            return false;
+        }
         match self.traversal {
             Traversal::Stack => self.traverse_stack::<S, true>(ray, stats),
             Traversal::Restart => self.traverse_restart::<S, true>(ray, stats),

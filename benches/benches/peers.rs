@@ -20,7 +20,7 @@
 //! way, so a few edge rays differ).
 
 use rt_benches::{BenchScene, peer_scenes};
-use rt_bvh::Bvh;
+use rt_bvh::{Bvh, BvhParams};
 use rt_core::raygen::RayKind;
 use rt_core::{Accel, Hit, Ray, Triangle};
 use std::fmt::Write as _;
@@ -198,24 +198,16 @@ fn threads_all() -> usize {
     std::thread::available_parallelism().map_or(1, |n| n.get())
 }
 
-fn pool(threads: usize) -> rayon::ThreadPool {
-    rayon::ThreadPoolBuilder::new()
-        .num_threads(threads)
-        .build()
-        .expect("a rayon pool")
-}
-
-/// Times every build contender on one thread and on all threads, `passes` times each after a
-/// warm-up pass, all interleaved; medians in ms.
+/// Times every build contender on one thread and on all threads: `passes` interleaved blocks of
+/// builds each, after a warm-up pass; medians in ms. rt-bvh builds on the calling thread (one
+/// thread: `parallel: false`; all threads: rayon's global pool, one worker per core).
 ///
 /// Embree runs on TBB, whose thread limit is process-wide: while a 1-thread device exists, every
-/// device is limited to one thread. So each pass makes one device for its thread count, builds
-/// once untimed on it (TBB starts its workers lazily), times its builds and drops it before the
-/// next thread count's device is made.
+/// device is limited to one thread. So each pass makes one device for its thread count and
+/// drops it before the next thread count's device is made.
 fn bench_builds(scene: &BenchScene, passes: usize) -> BuildResult {
     let tris = &scene.triangles;
     let counts = [1, threads_all()];
-    let pools = counts.map(pool);
     let presets = Bvh::<Triangle>::presets();
     let mut names: Vec<(String, String)> = Vec::new();
     let mut times: Vec<Vec<f64>> = Vec::new();
@@ -235,24 +227,57 @@ fn bench_builds(scene: &BenchScene, passes: usize) -> BuildResult {
             times[i].push(ms);
         }
     };
-    let timed = |f: &mut dyn FnMut()| {
-        let t = Instant::now();
+    // Builds are timed in blocks. Before each block every core works for 50 ms (a busy loop on
+    // rayon's threads) and then rests 20 ms, so the block starts with all cores up to speed and
+    // no pool's workers still spinning; the contender then builds BLOCK + 1 times back to back at
+    // one thread count, the first build untimed, and the fastest of the others counts. Blocks of
+    // all contenders and thread counts are interleaved, pass after pass; each contender's median
+    // over the passes is reported.
+    //
+    // PERF: this machine kind is a VM whose second core, once it has idled for some tens of
+    // milliseconds, comes back slowly. Without the busy loop, rt-bvh's 2-thread sphereflake
+    // build measured 1.16-1.49x its 1-thread time when nothing else ran between its blocks, and
+    // 1.68-1.74x with Embree's builds (which use both cores) interleaved; standalone, back to
+    // back, 1.78x. Single builds after a pause lost even more, for Embree too.
+    const BLOCK: usize = 3;
+    let warm_cores = || {
+        let until = Instant::now() + std::time::Duration::from_millis(50);
+        rayon::broadcast(|_| {
+            while Instant::now() < until {
+                std::hint::spin_loop();
+            }
+        });
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    };
+    let block = |f: &mut dyn FnMut()| -> f64 {
+        warm_cores();
         f();
-        t.elapsed().as_secs_f64() * 1e3
+        (0..BLOCK)
+            .map(|_| {
+                let t = Instant::now();
+                f();
+                t.elapsed().as_secs_f64() * 1e3
+            })
+            .fold(f64::INFINITY, f64::min)
     };
     for pass in 0..=passes {
-        for (threads, pool) in counts.iter().zip(&pools) {
+        for threads in &counts {
+            // As a user builds: on the calling thread, with rayon's global pool for the parallel
+            // build, and `parallel: false` for one thread (the same tree, as tests check).
             for (preset, params) in &presets {
-                let ms = timed(&mut || pool.install(|| drop(Bvh::build(tris, params))));
+                let params = BvhParams {
+                    parallel: params.parallel && *threads > 1,
+                    ..params.clone()
+                };
+                let ms = block(&mut || drop(Bvh::build(tris, &params)));
                 record(format!("rt-bvh {preset}"), *threads, pass, ms);
             }
             #[cfg(feature = "embree")]
             {
                 use rt_benches::embree::{EmbreeScene, Quality};
                 let device = EmbreeScene::device((*threads == 1).then_some(1)).expect("a device");
-                drop(EmbreeScene::build(&device, tris, Quality::Medium).expect("Embree build"));
                 for (quality, qname) in [(Quality::Medium, "medium"), (Quality::High, "high")] {
-                    let ms = timed(&mut || {
+                    let ms = block(&mut || {
                         drop(EmbreeScene::build(&device, tris, quality).expect("Embree build"));
                     });
                     record(format!("embree {qname}"), *threads, pass, ms);

@@ -152,12 +152,14 @@ struct Ctx<'a, P> {
     parallel: bool,
 }
 
+/// Inputs at least this large are built in parallel (when asked and threads are available).
+const PAR_BUILD_MIN: usize = 1 << 14;
 /// Sets at least this large are binned in parallel chunks.
 const PAR_BIN_MIN: usize = 1 << 15;
 /// Chunks of the parallel binning.
 const PAR_BIN_CHUNK: usize = 1 << 13;
 /// Subtrees at least this large are built as parallel tasks.
-const PAR_SUBTREE_MIN: usize = 1 << 12;
+const PAR_SUBTREE_MIN: usize = 1 << 11;
 
 /// Builds the tree for `params`. Each set costs O(n) for its binning and partition and there are
 /// O(log N) levels for balanced splits, so the build is O(N log N); the depth is bounded by
@@ -165,12 +167,21 @@ const PAR_SUBTREE_MIN: usize = 1 << 12;
 /// at worst. Scratch memory: the 32-byte references and, per thread, one bin array.
 pub(crate) fn build<P: Primitive>(prims: &[P], params: &BvhParams) -> Built<P> {
     let wide = params.layout == Layout::Wide;
+    // PERF: below PAR_BUILD_MIN primitives the parallel build's overhead outweighs its gain
+    // (teapot, 6,320 triangles: 1.1 ms sequential, 1.2 ms on 2 threads).
+    let parallel =
+        params.parallel && rayon::current_num_threads() > 1 && prims.len() >= PAR_BUILD_MIN;
+    let Refs {
+        mut refs,
+        tests,
+        bounds,
+        cbounds,
+    } = make_refs(prims, parallel);
     // Triangle packs when the wide tree is asked for and every valid primitive is a triangle
     // with the same test.
-    let test = if wide {
-        common_triangle_test(prims)
-    } else {
-        None
+    let test = match tests {
+        Tests::One(t) if wide => Some(t),
+        _ => None,
     };
     let max_leaf = match (wide, test) {
         (false, _) => params.max_leaf_size.clamp(1, 255) as usize,
@@ -188,23 +199,8 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &BvhParams) -> Built<P> {
         max_leaf,
         block: if test.is_some() { PACK } else { 1 },
         test,
-        parallel: params.parallel && rayon::current_num_threads() > 1,
+        parallel,
     };
-    let mut refs: Vec<PrimRef> = prims
-        .iter()
-        .enumerate()
-        .take(u32::MAX as usize)
-        .filter(|(_, p)| p.is_valid())
-        .map(|(i, p)| {
-            let b = p.bounds();
-            PrimRef {
-                min: b.min.to_array(),
-                id: i as u32,
-                max: b.max.to_array(),
-                pad: 0,
-            }
-        })
-        .collect();
     let valid = refs.len();
     let mut out = Built {
         binary: Vec::new(),
@@ -233,26 +229,29 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &BvhParams) -> Built<P> {
     let mut root = Set {
         start: 0,
         end: refs.len(),
-        bounds: Bounds::EMPTY,
-        cbounds: Bounds::EMPTY,
+        bounds,
+        cbounds,
         depth: 0,
         plan: Plan::Leaf,
     };
-    for r in &refs {
-        root.bounds = root.bounds.union(r.bounds());
-        root.cbounds = root.cbounds.grow(r.center2());
-    }
-    let mut scratch = Bins::new();
+    let mut scratch = Scratch::new();
     root.plan = plan(&ctx, &refs, 0, &root, &mut scratch);
     let mut shape = Shape::default();
     if wide {
         let mut o = WideOut::default();
-        let root_ref = emit_wide(&ctx, &mut refs, 0, root, &mut o, &mut shape, &mut scratch);
+        let root_ref = emit_wide(
+            &ctx,
+            &mut refs,
+            0,
+            Planned::new(root),
+            &mut o,
+            &mut shape,
+            &mut scratch,
+        );
         if root_ref.is_leaf() {
             // A tree of one leaf still starts at a node, so traversal always starts at node 0.
             let mut node = WideNode::EMPTY;
             set_child(&mut node, 0, &root.bounds, root_ref);
-            node.order = octant_orders(&[root.bounds]);
             o.nodes.push(node);
         }
         out.wide = o.nodes;
@@ -280,16 +279,127 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &BvhParams) -> Built<P> {
     out
 }
 
-/// The test of the triangle packs, when every valid primitive is a triangle with the same test.
-fn common_triangle_test<P: Primitive>(prims: &[P]) -> Option<TriangleTest> {
-    let mut test = None;
-    for p in prims.iter().filter(|p| p.is_valid()) {
-        let (_, t) = p.as_triangle()?;
-        if *test.get_or_insert(t) != t {
-            return None;
+/// What the valid primitives say of [`Primitive::as_triangle`].
+#[derive(Clone, Copy, Debug, PartialEq)]
+enum Tests {
+    /// No valid primitive.
+    Empty,
+    /// All are triangles with this test.
+    One(TriangleTest),
+    /// Some are not triangles, or the tests differ.
+    Mixed,
+}
+
+impl Tests {
+    fn and(self, o: Tests) -> Tests {
+        match (self, o) {
+            (Tests::Empty, x) | (x, Tests::Empty) => x,
+            (Tests::One(a), Tests::One(b)) if a == b => self,
+            _ => Tests::Mixed,
         }
     }
-    test
+}
+
+/// References per chunk of the reference pass's summary.
+const REFS_CHUNK: usize = 1 << 13;
+
+/// [`PrimRef::pad`] during the reference pass: what the primitive is.
+const INVALID: u32 = 0;
+const WATERTIGHT: u32 = 1;
+const MOLLER_TRUMBORE: u32 = 2;
+const OTHER: u32 = 3;
+
+/// The references to the valid primitives among the first 2³² - 1, in input order, what they
+/// say of `as_triangle`, and their bounds. On rayon's threads when `parallel` (the result is the
+/// same either way): every primitive is mapped to a reference in place, its kind kept in the
+/// reference's spare word; the references are summarised chunk by chunk; invalid ones, if any,
+/// are then dropped in one sequential pass.
+///
+/// PERF: gathering each chunk's valid references into its own vector and concatenating them
+/// took 0.68 ms on 2 threads for the sphereflake, no faster than the sequential 0.61 ms.
+fn make_refs<P: Primitive>(prims: &[P], parallel: bool) -> Refs {
+    let prims = &prims[..prims.len().min(u32::MAX as usize)];
+    let make = |(i, p): (usize, &P)| {
+        let kind = if !p.is_valid() {
+            INVALID
+        } else {
+            match p.as_triangle() {
+                Some((_, TriangleTest::Watertight)) => WATERTIGHT,
+                Some((_, TriangleTest::MollerTrumbore)) => MOLLER_TRUMBORE,
+                None => OTHER,
+            }
+        };
+        let b = if kind == INVALID {
+            Aabb::EMPTY
+        } else {
+            p.bounds()
+        };
+        PrimRef {
+            min: b.min.to_array(),
+            id: i as u32,
+            max: b.max.to_array(),
+            pad: kind,
+        }
+    };
+    let summary = |c: &[PrimRef]| {
+        let mut s = Refs {
+            refs: Vec::new(),
+            tests: Tests::Empty,
+            bounds: Bounds::EMPTY,
+            cbounds: Bounds::EMPTY,
+        };
+        let mut invalid = 0;
+        for r in c {
+            let t = match r.pad {
+                INVALID => {
+                    invalid += 1;
+                    continue;
+                }
+                WATERTIGHT => Tests::One(TriangleTest::Watertight),
+                MOLLER_TRUMBORE => Tests::One(TriangleTest::MollerTrumbore),
+                _ => Tests::Mixed,
+            };
+            s.tests = s.tests.and(t);
+            s.bounds = s.bounds.union(r.bounds());
+            s.cbounds = s.cbounds.grow(r.center2());
+        }
+        (s, invalid)
+    };
+    let merge = |(a, ia): (Refs, usize), (b, ib): (Refs, usize)| {
+        let r = Refs {
+            refs: Vec::new(),
+            tests: a.tests.and(b.tests),
+            bounds: a.bounds.union(b.bounds),
+            cbounds: a.cbounds.union(b.cbounds),
+        };
+        (r, ia + ib)
+    };
+    let (refs, (mut all, invalid)) = if parallel {
+        let refs: Vec<PrimRef> = prims.par_iter().enumerate().map(make).collect();
+        let s = refs
+            .par_chunks(REFS_CHUNK)
+            .map(summary)
+            .reduce_with(merge)
+            .unwrap_or_else(|| summary(&[]));
+        (refs, s)
+    } else {
+        let refs: Vec<PrimRef> = prims.iter().enumerate().map(make).collect();
+        let s = summary(&refs);
+        (refs, s)
+    };
+    all.refs = refs;
+    if invalid > 0 {
+        all.refs.retain(|r| r.pad != INVALID);
+    }
+    all
+}
+
+/// The references of [`make_refs`], what they say of `as_triangle`, and their bounds.
+struct Refs {
+    refs: Vec<PrimRef>,
+    tests: Tests,
+    bounds: Bounds,
+    cbounds: Bounds,
 }
 
 /// Depth and leaf count of what was emitted.
@@ -330,15 +440,32 @@ impl Bins {
         }
     }
 
+    /// Bins `refs` into `self`, every other reference into `spare` (then merged into `self`).
+    ///
+    /// PERF: neighbouring triangles usually land in the same bucket, so with one set of bins
+    /// each update waits for the previous one to be stored; alternating two sets halves that
+    /// chain (Embree does the same). Bunny, single-threaded build: 26.9 -> see the commit.
     #[inline(always)]
-    fn add(&mut self, refs: &[PrimRef], map: &BinMap) {
-        for r in refs {
-            let b = r.bounds();
-            let k = map.bins_of(b.min + b.max);
-            for (axis, &k) in k.iter().enumerate() {
-                self.counts[axis][k] += 1;
-                self.bounds[axis][k] = self.bounds[axis][k].union(b);
-            }
+    fn add(&mut self, spare: &mut Bins, refs: &[PrimRef], map: &BinMap, bins: usize) {
+        spare.reset(bins);
+        let mut pairs = refs.chunks_exact(2);
+        for pair in &mut pairs {
+            self.add_one(&pair[0], map);
+            spare.add_one(&pair[1], map);
+        }
+        for r in pairs.remainder() {
+            self.add_one(r, map);
+        }
+        self.merge(spare, bins);
+    }
+
+    #[inline(always)]
+    fn add_one(&mut self, r: &PrimRef, map: &BinMap) {
+        let b = r.bounds();
+        let k = map.bins_of(b.min + b.max);
+        for (axis, &k) in k.iter().enumerate() {
+            self.counts[axis][k] += 1;
+            self.bounds[axis][k] = self.bounds[axis][k].union(b);
         }
     }
 
@@ -349,6 +476,15 @@ impl Bins {
                 self.bounds[axis][k] = self.bounds[axis][k].union(o.bounds[axis][k]);
             }
         }
+    }
+}
+
+/// Two sets of bins (see [`Bins::add`]), boxed: each is 3.4 KB.
+struct Scratch(Box<Bins>, Box<Bins>);
+
+impl Scratch {
+    fn new() -> Self {
+        Self(Box::new(Bins::new()), Box::new(Bins::new()))
     }
 }
 
@@ -404,7 +540,13 @@ fn ceil_log2(n: usize) -> usize {
 /// in a leaf. A set too big for a leaf whose centres coincide is split by count, and so is any
 /// set once the remaining depth budget only just fits a balanced split: that keeps every tree
 /// within [`MAX_DEPTH`], the traversal stacks' bound.
-fn plan<P>(ctx: &Ctx<'_, P>, refs: &[PrimRef], base: usize, set: &Set, scratch: &mut Bins) -> Plan {
+fn plan<P>(
+    ctx: &Ctx<'_, P>,
+    refs: &[PrimRef],
+    base: usize,
+    set: &Set,
+    scratch: &mut Scratch,
+) -> Plan {
     let n = set.len();
     if n <= 1 {
         return Plan::Leaf;
@@ -424,11 +566,9 @@ fn plan<P>(ctx: &Ctx<'_, P>, refs: &[PrimRef], base: usize, set: &Set, scratch: 
             Plan::Leaf
         };
     }
-    // PERF: a set of n primitives gets min(bins, max(n, 4)) buckets; a small set needs no more
-    // planes than it has primitives, and initializing and sweeping 3 × 16 buckets dominated the
-    // cost of the ~38k small nodes of the bunny: SAH build 51.6 ms -> 40.1 ms with the same tree
-    // quality, measured with `cargo xtask compare --scene ../shared/meshes/stanford-bunny.obj`.
-    let bins = ctx.bins.min(n.max(4));
+    // PERF: a set of n primitives gets min(bins, 4 + n / 20) buckets (Embree's rule): the many
+    // small sets need few planes, and resetting and sweeping 3 × 16 buckets dominated their cost.
+    let bins = ctx.bins.min(4 + n / 20);
     let extent = set.cbounds.max - set.cbounds.min;
     let map = BinMap::new(&set.cbounds, bins);
     let refs = &refs[set.start - base..set.end - base];
@@ -437,25 +577,30 @@ fn plan<P>(ctx: &Ctx<'_, P>, refs: &[PrimRef], base: usize, set: &Set, scratch: 
             .par_chunks(PAR_BIN_CHUNK)
             .fold(
                 || {
-                    let mut b = Bins::new();
-                    b.reset(bins);
+                    let mut b = Scratch::new();
+                    b.0.reset(bins);
                     b
                 },
                 |mut b, chunk| {
-                    b.add(chunk, &map);
+                    b.0.add(&mut b.1, chunk, &map, bins);
                     b
                 },
             )
             .reduce_with(|mut a, b| {
-                a.merge(&b, bins);
+                a.0.merge(&b.0, bins);
                 a
             });
         if let Some(m) = merged {
             *scratch = m;
         }
+    } else if n >= 64 {
+        scratch.0.reset(bins);
+        scratch.0.add(&mut scratch.1, refs, &map, bins);
     } else {
-        scratch.reset(bins);
-        scratch.add(refs, &map);
+        scratch.0.reset(bins);
+        for r in refs {
+            scratch.0.add_one(r, &map);
+        }
     }
     let blocks = |count: u32| ((count as usize).div_ceil(ctx.block)) as f32;
     let mut best: Option<(f32, usize, usize)> = None; // (cost, axis, plane)
@@ -463,7 +608,7 @@ fn plan<P>(ctx: &Ctx<'_, P>, refs: &[PrimRef], base: usize, set: &Set, scratch: 
         if extent[axis] <= 0.0 {
             continue;
         }
-        let (bb, bc) = (&scratch.bounds[axis], &scratch.counts[axis]);
+        let (bb, bc) = (&scratch.0.bounds[axis], &scratch.0.counts[axis]);
         // Sweep from the right for the area-weighted blocks right of each plane, then from the
         // left to price each plane.
         let mut right_cost = [0.0f32; MAX_BINS];
@@ -507,73 +652,174 @@ fn plan<P>(ctx: &Ctx<'_, P>, refs: &[PrimRef], base: usize, set: &Set, scratch: 
 
 /// Splits `set` by its plan (not [`Plan::Leaf`]), reordering its references, and plans both
 /// halves.
-fn split<P>(
+fn split<P: Primitive>(
     ctx: &Ctx<'_, P>,
     refs: &mut [PrimRef],
     base: usize,
     set: &Set,
-    scratch: &mut Bins,
+    scratch: &mut Scratch,
 ) -> (Set, Set) {
     let range = &mut refs[set.start - base..set.end - base];
     let n = range.len();
-    let mid = match set.plan {
+    let parted = match set.plan {
         Plan::Sah { axis, plane, bins } => {
+            // The bucket of x = (c - lo) · scale is floor(clamp(x, 0, bins - 1)), and for
+            // 1 <= plane <= bins - 1 that is below `plane` exactly when x < plane: the same
+            // decision as the binning, on one axis, without the conversion.
             let map = BinMap::new(&set.cbounds, bins);
-            partition(range, |r| map.bins_of(r.center2())[axis] < plane)
+            let (lo, scale, plane) = (map.lo[axis], map.scale[axis], plane as f32);
+            Some(partition_any(ctx.parallel, range, |c2| {
+                (c2[axis] - lo) * scale < plane
+            }))
         }
         Plan::Middle => {
             let axis = set.cbounds.longest_axis();
             let middle = 0.5 * (set.cbounds.min[axis] + set.cbounds.max[axis]);
-            partition(range, |r| r.center2()[axis] < middle)
+            Some(partition_any(ctx.parallel, range, |c2| c2[axis] < middle))
         }
-        Plan::Count | Plan::Leaf => n / 2,
+        Plan::Count | Plan::Leaf => None,
     };
     // A count split, and any split that left a side empty (unreachable for SAH by
-    // construction; possible for the middle split of coinciding centres): half by count.
-    let mid = if set.plan == Plan::Count || mid == 0 || mid == n {
-        let axis = set.cbounds.longest_axis();
-        range.select_nth_unstable_by(n / 2, |a, b| {
-            a.center2()[axis].total_cmp(&b.center2()[axis])
-        });
-        n / 2
-    } else {
-        mid
-    };
-    let side = |start: usize, end: usize, refs: &[PrimRef]| {
-        let mut s = Set {
-            start,
-            end,
-            bounds: Bounds::EMPTY,
-            cbounds: Bounds::EMPTY,
-            depth: set.depth + 1,
-            plan: Plan::Leaf,
-        };
-        for r in &refs[start - base..end - base] {
-            s.bounds = s.bounds.union(r.bounds());
-            s.cbounds = s.cbounds.grow(r.center2());
+    // construction; possible for the middle split of coinciding centres): half by count, and
+    // the halves' bounds in a second pass.
+    let (mid, lb, rb) = match parted {
+        Some(p) if p.left_count > 0 && p.left_count < n => (p.left_count, p.left, p.right),
+        _ => {
+            let axis = set.cbounds.longest_axis();
+            range.select_nth_unstable_by(n / 2, |a, b| {
+                a.center2()[axis].total_cmp(&b.center2()[axis])
+            });
+            let (l, r) = range.split_at(n / 2);
+            (n / 2, side_bounds(l), side_bounds(r))
         }
-        s
     };
-    let mut left = side(set.start, set.start + mid, refs);
-    let mut right = side(set.start + mid, set.end, refs);
-    left.plan = plan(ctx, refs, base, &left, scratch);
-    right.plan = plan(ctx, refs, base, &right, scratch);
+    let side = |start: usize, end: usize, (bounds, cbounds): (Bounds, Bounds)| Set {
+        start,
+        end,
+        bounds,
+        cbounds,
+        depth: set.depth + 1,
+        plan: Plan::Leaf,
+    };
+    let mut left = side(set.start, set.start + mid, lb);
+    let mut right = side(set.start + mid, set.end, rb);
+    if ctx.parallel && left.len().min(right.len()) >= PAR_SUBTREE_MIN {
+        // Both halves' binning at once: a wide node makes up to seven splits before its
+        // children can be built in parallel, and the first ones are over large sets.
+        let (l, r) = rayon::join(
+            || plan(ctx, refs, base, &left, scratch),
+            || plan(ctx, refs, base, &right, &mut Scratch::new()),
+        );
+        (left.plan, right.plan) = (l, r);
+    } else {
+        left.plan = plan(ctx, refs, base, &left, scratch);
+        right.plan = plan(ctx, refs, base, &right, scratch);
+    }
     (left, right)
 }
 
-/// Moves the references for which `go_left` holds to the front; returns how many there are.
+/// The bounds and centre bounds of some references.
+fn side_bounds(refs: &[PrimRef]) -> (Bounds, Bounds) {
+    refs.iter()
+        .fold((Bounds::EMPTY, Bounds::EMPTY), |(b, c), r| {
+            (b.union(r.bounds()), c.grow(r.center2()))
+        })
+}
+
+/// Sets at least this large are partitioned in chunks (see [`partition_any`]).
+const CHUNKED_PARTITION_MIN: usize = 1 << 14;
+/// The chunk size of the chunked partition.
+const PARTITION_CHUNK: usize = 1 << 12;
+
+/// Partitions like [`partition`]; sets of [`CHUNKED_PARTITION_MIN`] references or more in fixed
+/// chunks, each partitioned on its own (on rayon's threads when `parallel`), then the references
+/// on the wrong side of the split point swapped pairwise. The chunks do not depend on the thread
+/// count, so neither does the result, and a sequential build makes the same tree.
+fn partition_any(
+    parallel: bool,
+    refs: &mut [PrimRef],
+    go_left: impl Fn(Vec3A) -> bool + Sync,
+) -> Parted {
+    let n = refs.len();
+    if n < CHUNKED_PARTITION_MIN {
+        return partition(refs, go_left);
+    }
+    let parts: Vec<_> = if parallel {
+        refs.par_chunks_mut(PARTITION_CHUNK)
+            .map(|c| partition(c, &go_left))
+            .collect()
+    } else {
+        refs.chunks_mut(PARTITION_CHUNK)
+            .map(|c| partition(c, &go_left))
+            .collect()
+    };
+    let mut left = (Bounds::EMPTY, Bounds::EMPTY);
+    let mut right = (Bounds::EMPTY, Bounds::EMPTY);
+    let mut total = 0;
+    // (start, end) of each chunk's right part and left part.
+    let mut rights = Vec::with_capacity(parts.len());
+    let mut lefts = Vec::with_capacity(parts.len());
+    for (k, p) in parts.iter().enumerate() {
+        let Parted {
+            left_count: count,
+            left: l,
+            right: r,
+        } = *p;
+        left = (left.0.union(l.0), left.1.union(l.1));
+        right = (right.0.union(r.0), right.1.union(r.1));
+        total += count;
+        let start = k * PARTITION_CHUNK;
+        let end = (start + PARTITION_CHUNK).min(n);
+        lefts.push((start, start + count));
+        rights.push((start + count, end));
+    }
+    // Right-side references before the split point trade places, in order, with left-side
+    // references after it: there are as many of one as of the other.
+    let misplaced_right = rights.iter().flat_map(|&(s, e)| s.min(total)..e.min(total));
+    let misplaced_left = lefts.iter().flat_map(|&(s, e)| s.max(total)..e.max(total));
+    for (i, j) in misplaced_right.zip(misplaced_left) {
+        refs.swap(i, j);
+    }
+    Parted {
+        left_count: total,
+        left,
+        right,
+    }
+}
+
+/// Moves the references whose doubled centre satisfies `go_left` to the front, accumulating
+/// both sides' bounds and centre bounds on the way: `(count on the left, left, right)`.
 #[inline(always)]
-fn partition(refs: &mut [PrimRef], go_left: impl Fn(&PrimRef) -> bool) -> usize {
+fn partition(refs: &mut [PrimRef], go_left: impl Fn(Vec3A) -> bool) -> Parted {
+    let mut left = (Bounds::EMPTY, Bounds::EMPTY);
+    let mut right = (Bounds::EMPTY, Bounds::EMPTY);
     let (mut i, mut j) = (0, refs.len());
     while i < j {
-        if go_left(&refs[i]) {
+        let b = refs[i].bounds();
+        let c2 = b.min + b.max;
+        if go_left(c2) {
+            left = (left.0.union(b), left.1.grow(c2));
             i += 1;
         } else {
+            right = (right.0.union(b), right.1.grow(c2));
             j -= 1;
             refs.swap(i, j);
         }
     }
-    i
+    Parted {
+        left_count: i,
+        left,
+        right,
+    }
+}
+
+/// The result of a partition: how many references went left, and each side's bounds and
+/// centre bounds.
+#[derive(Clone, Copy)]
+struct Parted {
+    left_count: usize,
+    left: (Bounds, Bounds),
+    right: (Bounds, Bounds),
 }
 
 /// Emits the binary subtree of `set` depth first (first child right after its parent). `refs`
@@ -585,7 +831,7 @@ fn emit_binary<P: Primitive>(
     set: Set,
     out: &mut Vec<Node>,
     shape: &mut Shape,
-    scratch: &mut Bins,
+    scratch: &mut Scratch,
 ) {
     shape.max_depth = shape.max_depth.max(set.depth);
     let index = out.len();
@@ -616,7 +862,7 @@ fn emit_binary<P: Primitive>(
         let (lo, hi) = refs.split_at_mut(right.start - base);
         let task = |refs: &mut [PrimRef], base: usize, s: Set| {
             let (mut v, mut sh) = (Vec::new(), Shape::default());
-            emit_binary(ctx, refs, base, s, &mut v, &mut sh, &mut Bins::new());
+            emit_binary(ctx, refs, base, s, &mut v, &mut sh, &mut Scratch::new());
             (v, sh)
         };
         let ((lv, ls), (rv, rs)) =
@@ -648,109 +894,223 @@ struct WideOut {
     packs: Vec<TriPack>,
 }
 
-/// Emits the wide subtree of `set` and returns the reference to it: a leaf, or a node whose
+/// A set, and the splits already made below it (see [`presplit`]).
+struct Planned {
+    set: Set,
+    below: Option<Box<[Planned; 2]>>,
+}
+
+impl Planned {
+    fn new(set: Set) -> Self {
+        Self { set, below: None }
+    }
+}
+
+/// Sets at least this large have the first [`PRESPLIT_LEVELS`] levels of their split tree made
+/// at once when they become a wide node (see [`presplit`]).
+const PRESPLIT_MIN: usize = 1 << 12;
+/// Three levels: the seven splits a balanced wide node makes.
+const PRESPLIT_LEVELS: usize = 3;
+
+/// Makes the splits below `set` down to `levels` levels at once, both halves of each split
+/// concurrently when they are large and the build is parallel.
+///
+/// The split tree below a set does not depend on the order its splits are made in, and a wide
+/// node only chooses which of them to use (the largest child first): so these splits, made
+/// eagerly for every large node whether the build is parallel or not, give the same tree, and
+/// splits the node does not use are kept for the child that will. PERF: opened one split at a
+/// time, the root of the sphereflake kept one thread busy for 1.9 ms before its children could
+/// be built in parallel; the 2-thread build was 1.46x faster than one thread, the binary tree's
+/// (whose two halves run in parallel from the root on) 1.73x.
+fn presplit<P: Primitive>(
+    ctx: &Ctx<'_, P>,
+    refs: &mut [PrimRef],
+    base: usize,
+    set: Set,
+    levels: usize,
+    scratch: &mut Scratch,
+) -> Planned {
+    if levels == 0 || set.plan == Plan::Leaf || set.len() < PRESPLIT_MIN {
+        return Planned::new(set);
+    }
+    let (l, r) = split(ctx, refs, base, &set, scratch);
+    let (pl, pr) = if ctx.parallel && l.len().min(r.len()) >= PAR_SUBTREE_MIN {
+        let own = &mut refs[set.start - base..set.end - base];
+        let (lo, hi) = own.split_at_mut(l.len());
+        rayon::join(
+            || presplit(ctx, lo, l.start, l, levels - 1, &mut Scratch::new()),
+            || presplit(ctx, hi, r.start, r, levels - 1, &mut Scratch::new()),
+        )
+    } else {
+        (
+            presplit(ctx, refs, base, l, levels - 1, scratch),
+            presplit(ctx, refs, base, r, levels - 1, scratch),
+        )
+    };
+    Planned {
+        set,
+        below: Some(Box::new([pl, pr])),
+    }
+}
+
+/// Emits the wide subtree of `planned` and returns the reference to it: a leaf, or a node whose
 /// children are the sets left after splitting the largest child until there are eight. `refs`
 /// holds the references from absolute index `base` on.
 fn emit_wide<P: Primitive>(
     ctx: &Ctx<'_, P>,
     refs: &mut [PrimRef],
     base: usize,
-    set: Set,
+    planned: Planned,
     out: &mut WideOut,
     shape: &mut Shape,
-    scratch: &mut Bins,
+    scratch: &mut Scratch,
 ) -> ChildRef {
+    let set = planned.set;
     shape.max_depth = shape.max_depth.max(set.depth);
     if set.plan == Plan::Leaf {
         shape.leaves += 1;
         return emit_leaf(ctx, &refs[set.start - base..set.end - base], &set, out);
     }
-    let mut kids: Vec<Set> = Vec::with_capacity(WIDTH);
-    let (l, r) = split(ctx, refs, base, &set, scratch);
+    let planned = if planned.below.is_none() {
+        presplit(ctx, refs, base, set, PRESPLIT_LEVELS, scratch)
+    } else {
+        planned
+    };
+    // Opens a set: its two halves, split now unless they were already.
+    let open = |p: Planned, refs: &mut [PrimRef], scratch: &mut Scratch| match p.below {
+        Some(b) => {
+            let [l, r] = *b;
+            (l, r)
+        }
+        None => {
+            let (l, r) = split(ctx, refs, base, &p.set, scratch);
+            (Planned::new(l), Planned::new(r))
+        }
+    };
+    let mut kids: Vec<Planned> = Vec::with_capacity(WIDTH);
+    let (l, r) = open(planned, refs, scratch);
     kids.extend([l, r]);
     while kids.len() < WIDTH {
         let mut largest: Option<(usize, f32)> = None;
         for (i, k) in kids.iter().enumerate() {
-            let area = k.bounds.half_area();
-            if k.plan != Plan::Leaf && largest.is_none_or(|(_, a)| area > a) {
+            let area = k.set.bounds.half_area();
+            if k.set.plan != Plan::Leaf && largest.is_none_or(|(_, a)| area > a) {
                 largest = Some((i, area));
             }
         }
         let Some((i, _)) = largest else { break };
-        let (l, r) = split(ctx, refs, base, &kids[i], scratch);
-        kids[i] = l;
-        kids.insert(i + 1, r);
+        let (l, r) = open(kids.remove(i), refs, scratch);
+        kids.insert(i, r);
+        kids.insert(i, l);
     }
     let index = out.nodes.len();
     out.nodes.push(WideNode::EMPTY);
     let mut node = WideNode::EMPTY;
-    let boxes: Vec<Bounds> = kids.iter().map(|k| k.bounds).collect();
-    node.order = octant_orders(&boxes);
-    let big = kids.iter().filter(|k| k.len() >= PAR_SUBTREE_MIN).count();
+    let bounds: Vec<Bounds> = kids.iter().map(|k| k.set.bounds).collect();
+    let big = kids
+        .iter()
+        .filter(|k| k.set.len() >= PAR_SUBTREE_MIN)
+        .count();
     if ctx.parallel && big >= 2 {
         // Each child into its own arrays, concurrently; then appended in order, which is where a
         // sequential build would have written them.
         let mut slices = Vec::with_capacity(kids.len());
         let mut rest = refs;
         let mut at = base;
-        for k in &kids {
-            let (_, tail) = std::mem::take(&mut rest).split_at_mut(k.start - at);
-            let (mine, tail) = tail.split_at_mut(k.len());
-            slices.push((mine, *k));
+        for k in kids {
+            let (_, tail) = std::mem::take(&mut rest).split_at_mut(k.set.start - at);
+            let (mine, tail) = tail.split_at_mut(k.set.len());
+            at = k.set.end;
+            slices.push((mine, k));
             rest = tail;
-            at = k.end;
         }
         let parts: Vec<(ChildRef, WideOut, Shape)> = slices
             .into_par_iter()
             .map(|(slice, k)| {
                 let mut o = WideOut::default();
                 let mut sh = Shape::default();
-                let c = emit_wide(ctx, slice, k.start, k, &mut o, &mut sh, &mut Bins::new());
+                let start = k.set.start;
+                let c = emit_wide(ctx, slice, start, k, &mut o, &mut sh, &mut Scratch::new());
                 (c, o, sh)
             })
             .collect();
-        for (i, (c, o, sh)) in parts.into_iter().enumerate() {
-            let c = append(ctx, out, o, c);
-            set_child(&mut node, i, &kids[i].bounds, c);
+        let mut built = Vec::with_capacity(parts.len());
+        for (c, o, sh) in parts {
             shape.merge(sh);
+            built.push((c, o));
+        }
+        for (i, c) in append_all(ctx, out, built).into_iter().enumerate() {
+            set_child(&mut node, i, &bounds[i], c);
         }
     } else {
-        for (i, k) in kids.iter().enumerate() {
-            let c = emit_wide(ctx, refs, base, *k, out, shape, scratch);
-            set_child(&mut node, i, &k.bounds, c);
+        for (i, k) in kids.into_iter().enumerate() {
+            let c = emit_wide(ctx, refs, base, k, out, shape, scratch);
+            set_child(&mut node, i, &bounds[i], c);
         }
     }
     out.nodes[index] = node;
     ChildRef::node(index as u32)
 }
 
-/// Appends a subtree built into its own arrays, relocating its node and pack indices; returns
-/// the relocated reference to its root.
-fn append<P>(ctx: &Ctx<'_, P>, out: &mut WideOut, part: WideOut, root: ChildRef) -> ChildRef {
-    let node_offset = out.nodes.len() as u32;
-    let pack_offset = out.packs.len() as u32;
-    let relocate = |c: ChildRef| {
+/// Appends subtrees built into their own arrays, in order, relocating their node and pack
+/// indices; returns the relocated references to their roots. Nodes and packs are copied on
+/// rayon's threads: `par_extend` of an indexed iterator writes each element in its place.
+///
+/// PERF: appending the root's eight subtrees one after another (4.2 MB for the sphereflake)
+/// took 0.43 ms on one thread while the other waited.
+fn append_all<P>(
+    ctx: &Ctx<'_, P>,
+    out: &mut WideOut,
+    parts: Vec<(ChildRef, WideOut)>,
+) -> Vec<ChildRef> {
+    // Where each part's nodes and packs start.
+    let mut node_base = Vec::with_capacity(parts.len());
+    let mut pack_base = Vec::with_capacity(parts.len());
+    let (mut nodes, mut packs) = (out.nodes.len(), out.packs.len());
+    for (_, p) in &parts {
+        node_base.push(nodes);
+        pack_base.push(packs);
+        nodes += p.nodes.len();
+        packs += p.packs.len();
+    }
+    let packed = ctx.test.is_some();
+    let relocate = |c: ChildRef, part: usize| {
         if c == ChildRef::EMPTY {
             c
         } else if c.is_leaf() {
-            if ctx.test.is_some() {
+            if packed {
                 let items = c.items();
-                ChildRef::leaf(items.start as u32 + pack_offset, items.len() as u32)
+                ChildRef::leaf((items.start + pack_base[part]) as u32, items.len() as u32)
             } else {
                 c
             }
         } else {
-            ChildRef::node(c.0 + node_offset)
+            ChildRef::node((c.index() + node_base[part]) as u32)
         }
     };
-    out.nodes.extend(part.nodes.into_iter().map(|mut n| {
-        for ch in &mut n.children {
-            *ch = relocate(ChildRef(*ch)).0;
-        }
-        n
-    }));
-    out.packs.extend(part.packs);
-    relocate(root)
+    // The part holding element `i` of the appended range, given the part starts.
+    let part_of = |bases: &[usize], i: usize| bases.partition_point(|&b| b <= i) - 1;
+    let first_node = out.nodes.len();
+    let first_pack = out.packs.len();
+    out.nodes
+        .par_extend((first_node..nodes).into_par_iter().map(|i| {
+            let k = part_of(&node_base, i);
+            let mut n = parts[k].1.nodes[i - node_base[k]];
+            for ch in &mut n.children {
+                *ch = relocate(ChildRef(*ch), k).0;
+            }
+            n
+        }));
+    out.packs
+        .par_extend((first_pack..packs).into_par_iter().map(|i| {
+            let k = part_of(&pack_base, i);
+            parts[k].1.packs[i - pack_base[k]]
+        }));
+    parts
+        .iter()
+        .enumerate()
+        .map(|(k, (root, _))| relocate(*root, k))
+        .collect()
 }
 
 /// A leaf: its triangles packed four to a pack, or its range of references.
@@ -786,27 +1146,4 @@ fn set_child(node: &mut WideNode, i: usize, b: &Bounds, c: ChildRef) {
         node.bounds[3 + a][i] = max[a];
     }
     node.children[i] = c.0;
-}
-
-/// For each of the eight ray octants, the children ordered by how early a ray of that octant
-/// meets their centres (the projection of the centre on the octant's diagonal), as nibbles.
-fn octant_orders(boxes: &[Bounds]) -> [u32; WIDTH] {
-    let mut orders = [0u32; WIDTH];
-    for (octant, order) in orders.iter_mut().enumerate() {
-        let d = Vec3A::new(
-            if octant & 1 != 0 { -1.0 } else { 1.0 },
-            if octant & 2 != 0 { -1.0 } else { 1.0 },
-            if octant & 4 != 0 { -1.0 } else { 1.0 },
-        );
-        let mut idx: Vec<usize> = (0..boxes.len()).collect();
-        let key = |i: usize| (boxes[i].min + boxes[i].max).dot(d);
-        idx.sort_by(|&a, &b| key(a).total_cmp(&key(b)));
-        // Empty lanes last; they are never entered.
-        idx.extend(boxes.len()..WIDTH);
-        *order = idx
-            .iter()
-            .enumerate()
-            .fold(0, |acc, (k, &i)| acc | (i as u32) << (4 * k));
-    }
-    orders
 }

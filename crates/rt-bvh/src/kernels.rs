@@ -191,8 +191,6 @@ pub(crate) struct RayData<S: Simd> {
     /// included).
     pub near: [usize; 3],
     pub far: [usize; 3],
-    /// Bit `a` set when the direction is negative along axis `a`.
-    pub octant: usize,
     pub shear: Shear,
     /// The origin along the shear's axes kx, ky, kz, the shear factors, and `t_min`, as
     /// four-lane vectors for the watertight test.
@@ -209,12 +207,10 @@ impl<S: Simd> RayData<S> {
     pub fn new(simd: S, ray: &Ray) -> Self {
         let mut near = [0; 3];
         let mut far = [0; 3];
-        let mut octant = 0;
         for a in 0..3 {
             let neg = ray.inv_dir[a].is_sign_negative();
             near[a] = a + 3 * neg as usize;
             far[a] = a + 3 * (!neg) as usize;
-            octant |= (neg as usize) << a;
         }
         let shear = Shear::new(ray.dir);
         let (o, d, inv) = (ray.origin, ray.dir, ray.inv_dir);
@@ -228,7 +224,6 @@ impl<S: Simd> RayData<S> {
             t_min8: s8(ray.t_min),
             near,
             far,
-            octant,
             shear,
             o4: [s4(o[shear.kx]), s4(o[shear.ky]), s4(o[shear.kz])],
             s4: [s4(shear.sx), s4(shear.sy), s4(shear.sz)],

@@ -267,7 +267,7 @@ fn consider(best: &mut Hit, id: u32, t: f32, u: f32, v: f32) {
 /// entered are sorted by entry distance; the nearest is visited next and the others pushed with
 /// their distances, farthest first, and skipped when popped if a hit closer than their entry
 /// (allowing [`SLAB_FAR_SCALE`], as the box test does) has been found meanwhile. Any hit: no
-/// sorting; the children are pushed in the node's precomputed order for the ray's octant, and
+/// sorting (measured slower: it found hits no sooner); the children are pushed in lane order, and
 /// the first hit ends the walk. Leaves are tested when popped, like nodes.
 #[inline(always)]
 pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
@@ -293,12 +293,11 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
             let (mask, t_entry) = kernels::slab8(simd, node, &r, best.t);
             if mask != 0 {
                 if ANY {
-                    let order = node.order[r.octant];
-                    for k in (0..WIDTH).rev() {
-                        let i = (order >> (4 * k)) as usize & 15;
-                        if mask >> i & 1 != 0 {
-                            stack.push((node.children[i], 0.0));
-                        }
+                    let mut m = mask;
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        stack.push((node.children[i], 0.0));
                     }
                 } else if mask & (mask - 1) == 0 {
                     current = node.child(mask.trailing_zeros() as usize);

@@ -43,8 +43,7 @@ impl<P: Primitive> Bvh<P> {
     ///   leaf's triangles (or primitives) inside the leaf's box;
     /// - every pack (or primitive slot) is in exactly one leaf; packs fill their lanes from the
     ///   first, unused lanes hold NaN; the triangle ids are distinct and as many as the valid
-    ///   primitives;
-    /// - each node's any-hit orders are permutations of its lanes.
+    ///   primitives.
     ///
     /// # Errors
     /// The first broken invariant.
@@ -179,18 +178,6 @@ impl<P: Primitive> Bvh<P> {
                 .count();
             if used == 0 {
                 return err(Some(i), "a node without children".into());
-            }
-            for (k, &order) in node.order.iter().enumerate() {
-                let mut seen = 0u32;
-                for slot in 0..WIDTH {
-                    seen |= 1 << ((order >> (4 * slot)) & 15);
-                }
-                if seen != 0xff {
-                    return err(
-                        Some(i),
-                        format!("any-hit order of octant {k} is no permutation"),
-                    );
-                }
             }
             for lane in 0..WIDTH {
                 let b = node.child_bounds(lane);

@@ -115,6 +115,8 @@ struct Set {
     cbounds: Bounds,
     depth: usize,
     plan: Plan,
+    /// The triangles are known to be distinct (see [`dedup`]).
+    unique: bool,
 }
 
 impl Set {
@@ -134,6 +136,9 @@ pub(crate) struct Built<P> {
     pub max_depth: usize,
     pub leaves: usize,
     pub valid: usize,
+    /// The primitives the tree holds: the valid ones but for bit-identical copies of a triangle
+    /// (see [`dedup`]).
+    pub stored: usize,
 }
 
 /// Build settings derived from the parameters and the input.
@@ -149,6 +154,9 @@ struct Ctx<'a, P> {
     block: usize,
     /// Triangle packs for this test, when the wide tree packs its leaves.
     test: Option<TriangleTest>,
+    /// Every valid primitive is a triangle, so bit-identical copies can be found (see
+    /// [`dedup`]).
+    triangles: bool,
     parallel: bool,
 }
 
@@ -199,6 +207,7 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &BvhParams) -> Built<P> {
         max_leaf,
         block: if test.is_some() { PACK } else { 1 },
         test,
+        triangles: matches!(tests, Tests::One(_)),
         parallel,
     };
     let valid = refs.len();
@@ -212,6 +221,7 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &BvhParams) -> Built<P> {
         max_depth: 0,
         leaves: 0,
         valid,
+        stored: 0,
     };
     if refs.is_empty() {
         if !wide {
@@ -233,9 +243,10 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &BvhParams) -> Built<P> {
         cbounds,
         depth: 0,
         plan: Plan::Leaf,
+        unique: false,
     };
     let mut scratch = Scratch::new();
-    root.plan = plan(&ctx, &refs, 0, &root, &mut scratch);
+    plan_set(&ctx, &mut refs, &mut root, &mut scratch);
     let mut shape = Shape::default();
     if wide {
         let mut o = WideOut::default();
@@ -273,10 +284,46 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &BvhParams) -> Built<P> {
     out.max_depth = shape.max_depth;
     out.leaves = shape.leaves;
     if test.is_none() {
+        if !wide {
+            compact_binary(&mut out.binary, &mut refs);
+        }
         out.prims = refs.iter().map(|r| prims[r.id as usize].clone()).collect();
         out.ids = refs.iter().map(|r| r.id).collect();
     }
+    out.stored = if test.is_some() {
+        out.packs.iter().map(TriPack::len).sum()
+    } else {
+        out.ids.len()
+    };
     out
+}
+
+/// Drops the references no leaf holds (copies left out by [`dedup`]) from the binary tree's
+/// reference array, moving the leaves' ranges down to match. Leaves never straddle a dropped
+/// reference, so each range stays contiguous.
+fn compact_binary(nodes: &mut [Node], refs: &mut Vec<PrimRef>) {
+    let mut held = vec![false; refs.len()];
+    for n in nodes.iter().filter(|n| n.is_leaf()) {
+        held[n.prim_range()].fill(true);
+    }
+    if held.iter().all(|&h| h) {
+        return;
+    }
+    // New index of each reference: how many held references come before it.
+    let mut new_index = Vec::with_capacity(refs.len());
+    let mut next = 0u32;
+    for &h in &held {
+        new_index.push(next);
+        next += u32::from(h);
+    }
+    for n in nodes.iter_mut().filter(|n| n.is_leaf()) {
+        n.index = new_index[n.index as usize];
+    }
+    let mut k = 0;
+    refs.retain(|_| {
+        k += 1;
+        held[k - 1]
+    });
 }
 
 /// What the valid primitives say of [`Primitive::as_triangle`].
@@ -650,6 +697,57 @@ fn plan<P>(
     Plan::Sah { axis, plane, bins }
 }
 
+/// Plans `set`, whose references are exactly `refs`: first, if its box centres all coincide
+/// and it is too big for a leaf, it drops bit-identical copies of its triangles ([`dedup`]),
+/// which shortens it; then [`plan`].
+fn plan_set<P: Primitive>(
+    ctx: &Ctx<'_, P>,
+    refs: &mut [PrimRef],
+    set: &mut Set,
+    scratch: &mut Scratch,
+) {
+    if ctx.triangles
+        && !set.unique
+        && set.len() > ctx.max_leaf
+        && set.cbounds.min == set.cbounds.max
+    {
+        let kept = dedup(ctx, refs);
+        set.end = set.start + kept;
+        set.unique = true;
+    }
+    set.plan = plan(ctx, refs, set.start, set, scratch);
+}
+
+/// Moves one reference per distinct triangle among `refs` to the front, the one with the
+/// smallest input index; returns how many there are. The others are left out of the tree.
+///
+/// Bit-identical triangles give bit-identical answers to every ray (the same `t`, `u`, `v`;
+/// the same occlusion), so only the copy with the smallest index can ever be the closest hit
+/// (it wins every tie), and any copy answers an any-hit query as well as another. Left in, a
+/// million copies of one triangle made one closest-hit ray test every copy, because a hit at
+/// an equal `t` on a smaller index must still be looked for: 1,000,000 tests and 159k node
+/// visits, 10 ms. Copies pile up in sets whose box centres coincide, which is the only place
+/// this looks. Triangles with the same vertices in another order are not copies: their answers
+/// may differ in the last bit.
+fn dedup<P: Primitive>(ctx: &Ctx<'_, P>, refs: &mut [PrimRef]) -> usize {
+    let key = |r: &PrimRef| {
+        let (t, _) = ctx.prims[r.id as usize]
+            .as_triangle()
+            .expect("dedup runs on triangles only");
+        let bits = [t.v0, t.v1, t.v2].map(|v| v.to_array().map(f32::to_bits));
+        (bits, r.id)
+    };
+    refs.sort_by_cached_key(key);
+    let mut kept = 0;
+    for i in 0..refs.len() {
+        if kept == 0 || key(&refs[i]).0 != key(&refs[kept - 1]).0 {
+            refs.swap(kept, i);
+            kept += 1;
+        }
+    }
+    kept
+}
+
 /// Splits `set` by its plan (not [`Plan::Leaf`]), reordering its references, and plans both
 /// halves.
 fn split<P: Primitive>(
@@ -700,20 +798,21 @@ fn split<P: Primitive>(
         cbounds,
         depth: set.depth + 1,
         plan: Plan::Leaf,
+        unique: set.unique,
     };
     let mut left = side(set.start, set.start + mid, lb);
     let mut right = side(set.start + mid, set.end, rb);
+    let (lrefs, rrefs) = refs[set.start - base..set.end - base].split_at_mut(mid);
     if ctx.parallel && left.len().min(right.len()) >= PAR_SUBTREE_MIN {
         // Both halves' binning at once: a wide node makes up to seven splits before its
         // children can be built in parallel, and the first ones are over large sets.
-        let (l, r) = rayon::join(
-            || plan(ctx, refs, base, &left, scratch),
-            || plan(ctx, refs, base, &right, &mut Scratch::new()),
+        rayon::join(
+            || plan_set(ctx, lrefs, &mut left, scratch),
+            || plan_set(ctx, rrefs, &mut right, &mut Scratch::new()),
         );
-        (left.plan, right.plan) = (l, r);
     } else {
-        left.plan = plan(ctx, refs, base, &left, scratch);
-        right.plan = plan(ctx, refs, base, &right, scratch);
+        plan_set(ctx, lrefs, &mut left, scratch);
+        plan_set(ctx, rrefs, &mut right, scratch);
     }
     (left, right)
 }
@@ -936,7 +1035,8 @@ fn presplit<P: Primitive>(
     let (l, r) = split(ctx, refs, base, &set, scratch);
     let (pl, pr) = if ctx.parallel && l.len().min(r.len()) >= PAR_SUBTREE_MIN {
         let own = &mut refs[set.start - base..set.end - base];
-        let (lo, hi) = own.split_at_mut(l.len());
+        // At the right half's start, not the left half's length: dropped copies may lie between.
+        let (lo, hi) = own.split_at_mut(r.start - set.start);
         rayon::join(
             || presplit(ctx, lo, l.start, l, levels - 1, &mut Scratch::new()),
             || presplit(ctx, hi, r.start, r, levels - 1, &mut Scratch::new()),

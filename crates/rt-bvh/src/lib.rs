@@ -220,6 +220,7 @@ pub struct Bvh<P: Primitive> {
     max_depth: usize,
     leaves: usize,
     valid: usize,
+    stored: usize,
 }
 
 impl<P: Primitive> Bvh<P> {
@@ -355,6 +356,7 @@ impl<P: Primitive> Accel for Bvh<P> {
             max_depth: b.max_depth,
             leaves: b.leaves,
             valid: b.valid,
+            stored: b.stored,
         };
         if params.layout == Layout::Wide {
             let wanted = params.kernels.unwrap_or(Kernels::Avx2);
@@ -400,7 +402,7 @@ impl<P: Primitive> Accel for Bvh<P> {
             leaves: self.leaves,
             empty_leaves: 0,
             max_depth: self.max_depth,
-            prim_refs: self.valid,
+            prim_refs: self.stored,
             valid_prims: self.valid,
             extra,
         }

@@ -32,7 +32,8 @@ impl<P: Primitive> Bvh<P> {
     /// Binary layout:
     /// - the nodes form one depth-first tree (first child right after its parent, second child
     ///   after the first child's subtree) no deeper than the traversal stack;
-    /// - every kept primitive is in exactly one leaf, and the primitive ids are distinct;
+    /// - every kept primitive is in exactly one leaf, and the primitive ids are distinct (as many
+    ///   as the valid primitives but for bit-identical copies of a triangle, which are left out);
     /// - every child box lies inside its parent's box, and every primitive's box inside its
     ///   leaf's box.
     ///
@@ -43,7 +44,7 @@ impl<P: Primitive> Bvh<P> {
     ///   leaf's triangles (or primitives) inside the leaf's box;
     /// - every pack (or primitive slot) is in exactly one leaf; packs fill their lanes from the
     ///   first, unused lanes hold NaN; the triangle ids are distinct and as many as the valid
-    ///   primitives.
+    ///   primitives but for bit-identical copies.
     ///
     /// # Errors
     /// The first broken invariant.
@@ -131,7 +132,7 @@ impl<P: Primitive> Bvh<P> {
         if let Some(k) = covered.iter().position(|c| !c) {
             return err(None, format!("primitive slot {k} is in no leaf"));
         }
-        distinct_ids(self.ids.iter().copied(), self.valid)
+        distinct_ids(self.ids.iter().copied(), self.stored, self.valid)
     }
 
     fn validate_wide(&self) -> Result<(), ValidationError> {
@@ -250,9 +251,9 @@ impl<P: Primitive> Bvh<P> {
                 .packs
                 .iter()
                 .flat_map(|p| p.ids.iter().copied().filter(|&id| id != u32::MAX));
-            distinct_ids(ids, self.valid)
+            distinct_ids(ids, self.stored, self.valid)
         } else {
-            distinct_ids(self.ids.iter().copied(), self.valid)
+            distinct_ids(self.ids.iter().copied(), self.stored, self.valid)
         }
     }
 }
@@ -271,13 +272,21 @@ fn pack_triangle_bounds(pack: &TriPack, lane: usize, test: TriangleTest) -> Aabb
     }
 }
 
-/// Checks that the ids are distinct and as many as the valid primitives.
-fn distinct_ids(ids: impl Iterator<Item = u32>, valid: usize) -> Result<(), ValidationError> {
+/// Checks that the ids are distinct and as many as the tree says it stores, no more than the
+/// valid primitives.
+fn distinct_ids(
+    ids: impl Iterator<Item = u32>,
+    stored: usize,
+    valid: usize,
+) -> Result<(), ValidationError> {
     let mut ids: Vec<u32> = ids.collect();
-    if ids.len() != valid {
+    if ids.len() != stored || stored > valid {
         return Err(ValidationError {
             node: None,
-            message: format!("{} ids for {valid} valid primitives", ids.len()),
+            message: format!(
+                "{} ids for {stored} stored of {valid} valid primitives",
+                ids.len()
+            ),
         });
     }
     ids.sort_unstable();

@@ -304,6 +304,20 @@ pub(crate) fn watertight4<S: Simd>(s: S, p: &TriPack, r: &RayData<S>, t_max: f32
     let neg = s.or4(s.or4(s.lt4(u, zero4), s.lt4(v, zero4)), s.lt4(w, zero4));
     let pos = s.or4(s.or4(s.gt4(u, zero4), s.gt4(v, zero4)), s.gt4(w, zero4));
     let det = s.add4(s.add4(u, v), w);
+    let redo = s.bits4(zero);
+    let candidates = s.andnot4(s.and4(neg, pos), s.ne_ordered4(det, zero4));
+    if s.bits4(candidates) & !redo == 0 {
+        // PERF: no lane can hit (each is outside an edge, or degenerate), so the division for
+        // `t` is skipped. Bunny, single-threaded, interleaved runs: primary rays 20.3 -> 21.0
+        // Mrays/s, incoherent 6.15 -> 6.3, shadow 8.7 -> 8.5.
+        return PackHits {
+            mask: 0,
+            redo,
+            t: zero4,
+            u: zero4,
+            v: zero4,
+        };
+    }
     let inv = s.div4(s.splat4(1.0), det);
     let t_num = s.add4(
         s.add4(s.mul4(u, s.mul4(sz, az)), s.mul4(v, s.mul4(sz, bz))),

@@ -142,6 +142,14 @@ mod x86 {
             _mm_storeu_ps(out.as_mut_ptr(), a);
             out
         });
+        op!(select4(m: __m128, a: __m128, b: __m128) -> __m128, _mm_blendv_ps(b, a, m));
+        op!(edges_f64(ax: __m128, ay: __m128, bx: __m128, by: __m128, cx: __m128, cy: __m128)
+            -> [__m128; 3], {
+            let d = |v: __m128| _mm256_cvtps_pd(v);
+            let (ax, ay, bx, by, cx, cy) = (d(ax), d(ay), d(bx), d(by), d(cx), d(cy));
+            let e = |a, b, c, d| _mm256_cvtpd_ps(_mm256_sub_pd(_mm256_mul_pd(a, b), _mm256_mul_pd(c, d)));
+            [e(cx, by, cy, bx), e(ax, cy, ay, cx), e(bx, ay, by, ax)]
+        });
     }
 }
 

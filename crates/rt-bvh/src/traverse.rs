@@ -133,7 +133,7 @@ impl<const MT: bool> Leaves for Packs<'_, MT> {
         simd: X,
         items: Range<usize>,
         r: &RayData<X>,
-        ray: &Ray,
+        _: &Ray,
         best: &mut Hit,
         stats: &mut S,
     ) -> bool {
@@ -148,20 +148,6 @@ impl<const MT: bool> Leaves for Packs<'_, MT> {
             };
             if ANY && h.mask != 0 {
                 return true;
-            }
-            // Lanes the kernel could not decide in single precision: the scalar test, which
-            // redoes them in double precision.
-            let mut redo = h.redo;
-            while redo != 0 {
-                let lane = redo.trailing_zeros() as usize;
-                redo &= redo - 1;
-                let tri = pack.triangle(lane, TriangleTest::Watertight);
-                if let Some(p) = tri.intersect_sheared(&r.shear, ray, best.t) {
-                    if ANY {
-                        return true;
-                    }
-                    consider(best, pack.ids[lane], p.t, p.u, p.v);
-                }
             }
             let mut mask = h.mask;
             if mask != 0 {

@@ -4,6 +4,7 @@
 //! - `no-sink-control`: a traversal written here without any sink at all, over the same nodes.
 //!
 //! `no-stats` should match `no-sink-control` (within noise) and `counters` cost a little more.
+//! The wide tree's group (`stats-sink-wide`) compares `no-stats` with `counters` only.
 //! Run with `cargo bench -p rt-benches --bench stats`.
 
 use criterion::{Criterion, Throughput, criterion_group, criterion_main};
@@ -108,6 +109,31 @@ fn benches(c: &mut Criterion) {
                 rays.iter()
                     .filter(|r| control(black_box(&bvh), r).is_some())
                     .count()
+            })
+        });
+        g.finish();
+
+        // The wide traversal: counting must cost something, not counting nothing (its pack loop
+        // calls the sink once per triangle a pack holds, a loop that must vanish with NoStats).
+        let wide = Bvh::build(&scene.triangles, &BvhParams::wide());
+        let mut g = c.benchmark_group(format!("stats-sink-wide/{}", scene.name));
+        g.sample_size(20);
+        g.throughput(Throughput::Elements(rays.len() as u64));
+        g.bench_function("no-stats", |b| {
+            b.iter(|| {
+                rays.iter()
+                    .filter(|r| black_box(&wide).intersect(r).is_some())
+                    .count()
+            })
+        });
+        g.bench_function("counters", |b| {
+            b.iter(|| {
+                let mut c = Counters::default();
+                let hits = rays
+                    .iter()
+                    .filter(|r| black_box(&wide).intersect_with(r, &mut c).is_some())
+                    .count();
+                (hits, c)
             })
         });
         g.finish();

@@ -1,5 +1,6 @@
 //! Build and primary-ray trace times of rt-bvh, rt-kdtree, rt-grid, rt-hgrid and rt-octree against the
-//! `obvhs` and `bvh` crates, on the same triangles and the same rays, single-threaded. Run with `cargo bench -p rt-benches --bench trace`.
+//! `obvhs` and `bvh` crates, on the same triangles and the same rays; traces single-threaded.
+//! Run with `cargo bench -p rt-benches --bench trace`. (Embree: `--bench peers`.)
 
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rt_benches::{BenchScene, scenes};
@@ -79,8 +80,19 @@ fn bench_build(c: &mut Criterion, scene: &BenchScene) {
         g.bench_function(BenchmarkId::new("rt-bvh", preset), |b| {
             b.iter(|| Bvh::build(black_box(&scene.triangles), &params));
         });
+        let sequential = BvhParams {
+            parallel: false,
+            ..params
+        };
+        g.bench_function(
+            BenchmarkId::new("rt-bvh", format!("{preset}-1-thread")),
+            |b| {
+                b.iter(|| Bvh::build(black_box(&scene.triangles), &sequential));
+            },
+        );
     }
-    // Single-threaded, as the kd-tree issue's build-time bound asks (rt-bvh's build is serial).
+    // rt-bvh's presets above build on rayon's threads (the default); the structures below are
+    // timed single-threaded unless a row says parallel.
     for (preset, params) in [
         ("sah", KdParams::sah()),
         ("wald-havran", KdParams::wald_havran()),
@@ -150,10 +162,16 @@ fn bench_trace(c: &mut Criterion, scene: &BenchScene) {
     g.sample_size(10);
     g.throughput(Throughput::Elements(rays.len() as u64));
 
-    let bvh = Bvh::build(&scene.triangles, &BvhParams::sah());
+    // rt-bvh's default (the wide tree) is the reference the other structures must agree with.
+    let bvh = Bvh::build(&scene.triangles, &BvhParams::wide());
     let expected = count_hits(&bvh, &rays);
-    g.bench_function("rt-bvh/watertight", |b| {
+    g.bench_function("rt-bvh/wide", |b| {
         b.iter(|| count_hits(black_box(&bvh), &rays))
+    });
+    let binary = Bvh::build(&scene.triangles, &BvhParams::sah());
+    assert_eq!(count_hits(&binary, &rays), expected, "rt-bvh/binary");
+    g.bench_function("rt-bvh/binary", |b| {
+        b.iter(|| count_hits(black_box(&binary), &rays))
     });
     for (label, params) in [
         ("rt-kdtree/stack", KdParams::sah()),
@@ -180,10 +198,13 @@ fn bench_trace(c: &mut Criterion, scene: &BenchScene) {
         b.iter(|| count_hits(black_box(&octree), &rays))
     });
     let mt: Vec<MtTriangle> = scene.triangles.iter().copied().map(MtTriangle).collect();
-    let bvh_mt = Bvh::build(&mt, &BvhParams::sah());
-    g.bench_function("rt-bvh/moller-trumbore", |b| {
-        b.iter(|| count_hits(black_box(&bvh_mt), &rays))
-    });
+    for (label, params) in [
+        ("rt-bvh/wide-mt", BvhParams::wide()),
+        ("rt-bvh/binary-mt", BvhParams::sah()),
+    ] {
+        let bvh_mt = Bvh::build(&mt, &params);
+        g.bench_function(label, |b| b.iter(|| count_hits(black_box(&bvh_mt), &rays)));
+    }
 
     // obvhs: its own Möller–Trumbore test, triangles reordered to leaf order as its examples
     // recommend (no index indirection in the hot loop).

@@ -308,3 +308,48 @@ fn octree_adapts_to_the_teapot_in_a_stadium() {
         tests("grid")
     );
 }
+
+/// Every rt-bvh preset answers like brute force on every shared mesh and every built-in scene,
+/// for all three ray kinds (issue 11's check of the wide tree, on small images so the test stays
+/// quick; the full-size runs are in rt-bvh's documentation).
+#[test]
+fn every_bvh_preset_agrees_on_every_mesh_and_ray_kind() {
+    let Some(dir) = shared_meshes_dir() else {
+        return;
+    };
+    let mut scenes: Vec<String> = std::fs::read_dir(&dir)
+        .expect("the shared meshes directory lists")
+        .map(|e| e.expect("a directory entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "obj"))
+        .map(|p| p.to_str().expect("a UTF-8 path").to_string())
+        .collect();
+    scenes.sort();
+    assert!(scenes.len() >= 12, "{scenes:?}");
+    scenes.extend(["sphereflake", "random-soup", "teapot-in-stadium"].map(String::from));
+    for scene in &scenes {
+        for kind in ["primary", "incoherent", "shadow"] {
+            let v = json(&compare(&[
+                "--scene",
+                scene,
+                "--rays",
+                kind,
+                "--structures",
+                "bvh,bvh-binary,bvh-median,bvh-middle",
+                "--width",
+                "96",
+                "--height",
+                "72",
+                "--check-rays",
+                "800",
+                "--repeats",
+                "1",
+                "--json",
+            ]));
+            let rows = v["results"].as_array().unwrap();
+            assert_eq!(rows.len(), 5, "brute force and four presets");
+            for r in rows {
+                assert_eq!(r["mismatches"], 0, "{scene} {kind}: {r}");
+            }
+        }
+    }
+}

@@ -337,6 +337,36 @@ pub fn stadium_with_teapot(with_teapot: bool) -> Mesh {
     mesh
 }
 
+/// A terrain of about `triangles` triangles: a square grid of `k × k` cells over `[0, 1]²`, two
+/// triangles per cell (`k = sqrt(triangles / 2)`), with heights from a sum of sines (hills of
+/// several sizes, up to 0.1 high). Shared vertices, no degenerate triangles: a large, realistic
+/// input for build times and memory.
+pub fn height_field(triangles: usize) -> Mesh {
+    let k = ((triangles as f64 / 2.0).sqrt().round() as u32).max(1);
+    let n = k + 1;
+    let h = |x: f32, y: f32| {
+        0.05 * (6.1 * x).sin() * (5.3 * y).cos()
+            + 0.03 * (23.0 * x + 1.3).sin() * (19.0 * y + 0.7).sin()
+            + 0.02 * (71.0 * (x + y)).sin()
+    };
+    let mut positions = Vec::with_capacity((n * n) as usize);
+    for j in 0..n {
+        for i in 0..n {
+            let (x, y) = (i as f32 / k as f32, j as f32 / k as f32);
+            positions.push(Vec3::new(x, h(x, y), y));
+        }
+    }
+    let mut indices = Vec::with_capacity(2 * (k * k) as usize);
+    for j in 0..k {
+        for i in 0..k {
+            let v = j * n + i;
+            indices.push([v, v + n, v + 1]);
+            indices.push([v + 1, v + n, v + n + 1]);
+        }
+    }
+    Mesh::new(positions, indices).expect("height_field indices are in range by construction")
+}
+
 /// `count` random triangles with random orientation, edge lengths up to a tenth of the unit
 /// cube they fill.
 pub fn random_soup(count: usize, seed: u64) -> Mesh {

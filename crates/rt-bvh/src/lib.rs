@@ -121,12 +121,17 @@ pub enum Layout {
     Wide,
 }
 
-/// Which code traces a wide tree (see [`Bvh::set_kernels`]).
+/// Which code traces a wide tree (see [`Bvh::set_kernels`]). By default the first of `Avx2`,
+/// `Sse2` and `Portable` that the CPU runs.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kernels {
-    /// The SIMD kernels compiled for AVX2 and FMA (x86-64 CPUs that have both).
+    /// The SIMD kernels with AVX2 intrinsics, compiled with AVX2 and FMA enabled (x86-64 CPUs
+    /// that have both, detected at run time).
     Avx2,
-    /// The same kernels compiled for the target's baseline (SSE2 on x86-64, NEON on aarch64).
+    /// The same kernels with SSE2 intrinsics (every x86-64 CPU).
+    Sse2,
+    /// The same kernels on plain arrays, compiled for the target's baseline (any target; what
+    /// aarch64 runs).
     Portable,
     /// Triangles tested one at a time with the scalar functions of `rt-core`: the reference the
     /// SIMD kernels are tested against, bit for bit.
@@ -152,8 +157,16 @@ pub struct BvhParams {
     pub max_leaf_size: u32,
     /// Build large subtrees on rayon's threads. The tree is the same either way.
     pub parallel: bool,
-    /// Force the kernels of a wide tree; `None` picks the fastest this CPU runs.
+    /// Force the kernels of a wide tree; `None`, or kernels this CPU cannot run, picks the
+    /// fastest it runs.
     pub kernels: Option<Kernels>,
+    /// Wide tree, closest hit: visit the children a ray enters nearest first (sorted by entry
+    /// distance). `false` visits them in lane order: only there to measure what sorting gains.
+    pub sort_children: bool,
+    /// Wide tree, any hit: the dedicated path (children in lane order, no sorting, stop at the
+    /// first hit). `false` answers occlusion with the closest-hit traversal: only there to
+    /// measure what the dedicated path gains.
+    pub any_hit_path: bool,
 }
 
 impl BvhParams {
@@ -168,6 +181,8 @@ impl BvhParams {
             max_leaf_size: 8,
             parallel: true,
             kernels: None,
+            sort_children: true,
+            any_hit_path: true,
         }
     }
 
@@ -217,6 +232,8 @@ pub struct Bvh<P: Primitive> {
     ids: Vec<u32>,
     kernels: Kernels,
     isa: Isa,
+    sort_children: bool,
+    any_hit_path: bool,
     max_depth: usize,
     leaves: usize,
     valid: usize,
@@ -275,11 +292,12 @@ impl<P: Primitive> Bvh<P> {
             return kernels == Kernels::Portable;
         }
         let isa = match kernels {
-            Kernels::Avx2 => match Isa::avx2() {
-                Some(isa) => isa,
-                None => return false,
-            },
-            Kernels::Portable | Kernels::Scalar => Isa::Portable,
+            Kernels::Avx2 => Isa::avx2(),
+            Kernels::Sse2 => Isa::sse2(),
+            Kernels::Portable | Kernels::Scalar => Some(Isa::Portable),
+        };
+        let Some(isa) = isa else {
+            return false;
         };
         self.kernels = kernels;
         self.isa = isa;
@@ -296,32 +314,51 @@ impl<P: Primitive> Bvh<P> {
         match self.layout {
             Layout::Binary => self.traverse_binary::<S, ANY>(ray, stats),
             Layout::Wide if self.wide.is_empty() => None,
-            Layout::Wide => {
-                let (nodes, isa) = (&self.wide[..], self.isa);
-                match (self.test, self.kernels) {
-                    (Some(test), Kernels::Scalar) => {
-                        let leaves = ScalarPacks {
-                            packs: &self.packs,
-                            test,
-                        };
-                        simd::dispatch::<_, S, ANY>(isa, nodes, &leaves, ray, stats)
-                    }
-                    (Some(TriangleTest::Watertight), _) => {
-                        let leaves = Packs::<false> { packs: &self.packs };
-                        simd::dispatch::<_, S, ANY>(isa, nodes, &leaves, ray, stats)
-                    }
-                    (Some(TriangleTest::MollerTrumbore), _) => {
-                        let leaves = Packs::<true> { packs: &self.packs };
-                        simd::dispatch::<_, S, ANY>(isa, nodes, &leaves, ray, stats)
-                    }
-                    (None, _) => {
-                        let leaves = Prims {
-                            prims: &self.prims,
-                            ids: &self.ids,
-                        };
-                        simd::dispatch::<_, S, ANY>(isa, nodes, &leaves, ray, stats)
-                    }
-                }
+            // Occlusion through the closest-hit traversal: only to measure the any-hit path.
+            Layout::Wide if ANY && !self.any_hit_path => self.wide::<S, false>(ray, stats),
+            Layout::Wide => self.wide::<S, ANY>(ray, stats),
+        }
+    }
+
+    /// The wide traversal with this tree's leaves, kernels and child ordering.
+    #[inline(always)]
+    fn wide<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        if self.sort_children {
+            self.wide_with::<S, ANY, true>(ray, stats)
+        } else {
+            self.wide_with::<S, ANY, false>(ray, stats)
+        }
+    }
+
+    #[inline(always)]
+    fn wide_with<S: Stats, const ANY: bool, const SORT: bool>(
+        &self,
+        ray: &Ray,
+        stats: &mut S,
+    ) -> Option<Hit> {
+        let (nodes, isa) = (&self.wide[..], self.isa);
+        match (self.test, self.kernels) {
+            (Some(test), Kernels::Scalar) => {
+                let leaves = ScalarPacks {
+                    packs: &self.packs,
+                    test,
+                };
+                simd::dispatch::<_, S, ANY, SORT>(isa, nodes, &leaves, ray, stats)
+            }
+            (Some(TriangleTest::Watertight), _) => {
+                let leaves = Packs::<false> { packs: &self.packs };
+                simd::dispatch::<_, S, ANY, SORT>(isa, nodes, &leaves, ray, stats)
+            }
+            (Some(TriangleTest::MollerTrumbore), _) => {
+                let leaves = Packs::<true> { packs: &self.packs };
+                simd::dispatch::<_, S, ANY, SORT>(isa, nodes, &leaves, ray, stats)
+            }
+            (None, _) => {
+                let leaves = Prims {
+                    prims: &self.prims,
+                    ids: &self.ids,
+                };
+                simd::dispatch::<_, S, ANY, SORT>(isa, nodes, &leaves, ray, stats)
             }
         }
     }
@@ -353,15 +390,20 @@ impl<P: Primitive> Accel for Bvh<P> {
             ids: b.ids,
             kernels: Kernels::Portable,
             isa: Isa::Portable,
+            sort_children: params.sort_children,
+            any_hit_path: params.any_hit_path,
             max_depth: b.max_depth,
             leaves: b.leaves,
             valid: b.valid,
             stored: b.stored,
         };
         if params.layout == Layout::Wide {
-            let wanted = params.kernels.unwrap_or(Kernels::Avx2);
-            if !bvh.set_kernels(wanted) {
-                bvh.set_kernels(Kernels::Portable);
+            // The kernels asked for, else the fastest this CPU runs.
+            let chosen = params.kernels.is_some_and(|k| bvh.set_kernels(k));
+            if !chosen {
+                let _ = [Kernels::Avx2, Kernels::Sse2, Kernels::Portable]
+                    .into_iter()
+                    .any(|k| bvh.set_kernels(k));
             }
         }
         bvh

@@ -1,7 +1,8 @@
 //! Runtime CPU dispatch for the wide layout, its AVX2 kernels and its traversal stack: the only
 //! module of the crate allowed `unsafe`.
 //!
-//! - [`Avx2`] implements the kernels' [`Simd`] operations with AVX2 intrinsics. An intrinsic
+//! - [`Avx2`] implements the kernels' [`Simd`] operations with AVX2 intrinsics, and [`Sse2`]
+//!   with SSE2 ones, the fallback on x86-64 CPUs without AVX2 (every x86-64 CPU runs SSE2). An intrinsic
 //!   needs the CPU feature it is compiled for, so each call sits in an `unsafe` block; they are
 //!   sound because an `Avx2` value can only be made by [`Avx2::detect`], after the CPU reported
 //!   AVX2 and FMA. The wide traversal (`traverse::wide`) is compiled once inside [`wide_avx2`]
@@ -13,7 +14,9 @@
 //!   entries it will never use; it reads a slot only after writing it.
 #![allow(unsafe_code)]
 
-use crate::kernels::{Portable, Simd};
+use crate::kernels::Portable;
+#[cfg(target_arch = "x86_64")]
+use crate::kernels::Simd;
 use crate::node::WideNode;
 use crate::traverse::{Leaves, wide};
 use rt_core::{Hit, Ray, Stats};
@@ -24,10 +27,20 @@ use std::mem::MaybeUninit;
 pub(crate) enum Isa {
     #[cfg(target_arch = "x86_64")]
     Avx2(Avx2),
+    #[cfg(target_arch = "x86_64")]
+    Sse2,
     Portable,
 }
 
 impl Isa {
+    /// SSE2, on x86-64 (where every CPU has it), else `None`.
+    pub fn sse2() -> Option<Isa> {
+        #[cfg(target_arch = "x86_64")]
+        return Some(Isa::Sse2);
+        #[cfg(not(target_arch = "x86_64"))]
+        None
+    }
+
     /// AVX2 with FMA when this CPU has both, else `None`.
     pub fn avx2() -> Option<Isa> {
         #[cfg(target_arch = "x86_64")]
@@ -40,7 +53,7 @@ impl Isa {
 
 /// Runs the wide traversal with the instruction set `isa`.
 #[inline(always)]
-pub(crate) fn dispatch<L: Leaves, S: Stats, const ANY: bool>(
+pub(crate) fn dispatch<L: Leaves, S: Stats, const ANY: bool, const SORT: bool>(
     isa: Isa,
     nodes: &[WideNode],
     leaves: &L,
@@ -51,24 +64,28 @@ pub(crate) fn dispatch<L: Leaves, S: Stats, const ANY: bool>(
         #[cfg(target_arch = "x86_64")]
         // SAFETY: an `Avx2` value exists only if `Avx2::detect` found AVX2 and FMA on this CPU,
         // which is all `wide_avx2` requires.
-        Isa::Avx2(simd) => unsafe { wide_avx2::<L, S, ANY>(simd, nodes, leaves, ray, stats) },
-        Isa::Portable => wide::<Portable, L, S, ANY>(Portable, nodes, leaves, ray, stats),
+        Isa::Avx2(simd) => unsafe { wide_avx2::<L, S, ANY, SORT>(simd, nodes, leaves, ray, stats) },
+        #[cfg(target_arch = "x86_64")]
+        Isa::Sse2 => wide::<Sse2, L, S, ANY, SORT>(Sse2, nodes, leaves, ray, stats),
+        Isa::Portable => wide::<Portable, L, S, ANY, SORT>(Portable, nodes, leaves, ray, stats),
     }
 }
 
 /// The wide traversal, compiled with AVX2 and FMA enabled so the intrinsics inline.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn wide_avx2<L: Leaves, S: Stats, const ANY: bool>(
+fn wide_avx2<L: Leaves, S: Stats, const ANY: bool, const SORT: bool>(
     simd: Avx2,
     nodes: &[WideNode],
     leaves: &L,
     ray: &Ray,
     stats: &mut S,
 ) -> Option<Hit> {
-    wide::<Avx2, L, S, ANY>(simd, nodes, leaves, ray, stats)
+    wide::<Avx2, L, S, ANY, SORT>(simd, nodes, leaves, ray, stats)
 }
 
+#[cfg(target_arch = "x86_64")]
+pub(crate) use sse2::Sse2;
 #[cfg(target_arch = "x86_64")]
 pub(crate) use x86::Avx2;
 
@@ -150,6 +167,184 @@ mod x86 {
             let e = |a, b, c, d| _mm256_cvtpd_ps(_mm256_sub_pd(_mm256_mul_pd(a, b), _mm256_mul_pd(c, d)));
             [e(cx, by, cy, bx), e(ax, cy, ay, cx), e(bx, ay, by, ax)]
         });
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod sse2 {
+    use super::Simd;
+    use std::arch::x86_64::*;
+
+    /// The kernels' operations as SSE2 intrinsics, which every x86-64 CPU runs: the fallback
+    /// when AVX2 is missing, with no detection. Eight lanes are two four-lane halves.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub(crate) struct Sse2;
+
+    /// An expression of SSE/SSE2 intrinsics.
+    macro_rules! sse {
+        ($body:expr) => {
+            // SAFETY: SSE and SSE2 belong to the x86-64 baseline, so every CPU this module is
+            // compiled for runs them; loads and stores go through references to arrays of the
+            // vector's exact size.
+            unsafe { $body }
+        };
+    }
+
+    /// Four f32 lanes widened to f64, in two halves.
+    #[inline(always)]
+    fn widen(v: __m128) -> [__m128d; 2] {
+        sse!([_mm_cvtps_pd(v), _mm_cvtps_pd(_mm_movehl_ps(v, v))])
+    }
+
+    impl Simd for Sse2 {
+        type F8 = [__m128; 2];
+        type F4 = __m128;
+        type M4 = __m128;
+
+        #[inline(always)]
+        fn load8(self, v: &[f32; 8]) -> [__m128; 2] {
+            sse!([_mm_loadu_ps(v.as_ptr()), _mm_loadu_ps(v[4..].as_ptr())])
+        }
+        #[inline(always)]
+        fn splat8(self, x: f32) -> [__m128; 2] {
+            sse!([_mm_set1_ps(x); 2])
+        }
+        #[inline(always)]
+        fn sub8(self, a: [__m128; 2], b: [__m128; 2]) -> [__m128; 2] {
+            sse!([_mm_sub_ps(a[0], b[0]), _mm_sub_ps(a[1], b[1])])
+        }
+        #[inline(always)]
+        fn mul8(self, a: [__m128; 2], b: [__m128; 2]) -> [__m128; 2] {
+            sse!([_mm_mul_ps(a[0], b[0]), _mm_mul_ps(a[1], b[1])])
+        }
+        #[inline(always)]
+        fn max8(self, a: [__m128; 2], b: [__m128; 2]) -> [__m128; 2] {
+            // `maxps a, b` is `a > b ? a : b`, NaN in `a` giving `b`, as the slab test's `if`.
+            sse!([_mm_max_ps(a[0], b[0]), _mm_max_ps(a[1], b[1])])
+        }
+        #[inline(always)]
+        fn min8(self, a: [__m128; 2], b: [__m128; 2]) -> [__m128; 2] {
+            sse!([_mm_min_ps(a[0], b[0]), _mm_min_ps(a[1], b[1])])
+        }
+        #[inline(always)]
+        fn le_bits8(self, a: [__m128; 2], b: [__m128; 2]) -> u32 {
+            let lo = sse!(_mm_movemask_ps(_mm_cmple_ps(a[0], b[0]))) as u32;
+            let hi = sse!(_mm_movemask_ps(_mm_cmple_ps(a[1], b[1]))) as u32;
+            lo | hi << 4
+        }
+        #[inline(always)]
+        fn store8(self, a: [__m128; 2]) -> [f32; 8] {
+            let mut out = [0.0f32; 8];
+            sse!({
+                _mm_storeu_ps(out.as_mut_ptr(), a[0]);
+                _mm_storeu_ps(out[4..].as_mut_ptr(), a[1]);
+            });
+            out
+        }
+        #[inline(always)]
+        fn load4(self, v: &[f32; 4]) -> __m128 {
+            sse!(_mm_loadu_ps(v.as_ptr()))
+        }
+        #[inline(always)]
+        fn splat4(self, x: f32) -> __m128 {
+            sse!(_mm_set1_ps(x))
+        }
+        #[inline(always)]
+        fn add4(self, a: __m128, b: __m128) -> __m128 {
+            sse!(_mm_add_ps(a, b))
+        }
+        #[inline(always)]
+        fn sub4(self, a: __m128, b: __m128) -> __m128 {
+            sse!(_mm_sub_ps(a, b))
+        }
+        #[inline(always)]
+        fn mul4(self, a: __m128, b: __m128) -> __m128 {
+            sse!(_mm_mul_ps(a, b))
+        }
+        #[inline(always)]
+        fn div4(self, a: __m128, b: __m128) -> __m128 {
+            sse!(_mm_div_ps(a, b))
+        }
+        #[inline(always)]
+        fn eq4(self, a: __m128, b: __m128) -> __m128 {
+            sse!(_mm_cmpeq_ps(a, b))
+        }
+        #[inline(always)]
+        fn ne_ordered4(self, a: __m128, b: __m128) -> __m128 {
+            // `cmpneqps` is true for NaN; and-ing with `cmpordps` leaves the ordered lanes.
+            sse!(_mm_and_ps(_mm_cmpneq_ps(a, b), _mm_cmpord_ps(a, b)))
+        }
+        #[inline(always)]
+        fn lt4(self, a: __m128, b: __m128) -> __m128 {
+            sse!(_mm_cmplt_ps(a, b))
+        }
+        #[inline(always)]
+        fn gt4(self, a: __m128, b: __m128) -> __m128 {
+            sse!(_mm_cmpgt_ps(a, b))
+        }
+        #[inline(always)]
+        fn le4(self, a: __m128, b: __m128) -> __m128 {
+            sse!(_mm_cmple_ps(a, b))
+        }
+        #[inline(always)]
+        fn ge4(self, a: __m128, b: __m128) -> __m128 {
+            sse!(_mm_cmpge_ps(a, b))
+        }
+        #[inline(always)]
+        fn and4(self, a: __m128, b: __m128) -> __m128 {
+            sse!(_mm_and_ps(a, b))
+        }
+        #[inline(always)]
+        fn or4(self, a: __m128, b: __m128) -> __m128 {
+            sse!(_mm_or_ps(a, b))
+        }
+        #[inline(always)]
+        fn andnot4(self, a: __m128, b: __m128) -> __m128 {
+            sse!(_mm_andnot_ps(a, b))
+        }
+        #[inline(always)]
+        fn bits4(self, m: __m128) -> u32 {
+            sse!(_mm_movemask_ps(m)) as u32
+        }
+        #[inline(always)]
+        fn store4(self, a: __m128) -> [f32; 4] {
+            let mut out = [0.0f32; 4];
+            sse!(_mm_storeu_ps(out.as_mut_ptr(), a));
+            out
+        }
+        #[inline(always)]
+        fn select4(self, m: __m128, a: __m128, b: __m128) -> __m128 {
+            sse!(_mm_or_ps(_mm_and_ps(m, a), _mm_andnot_ps(m, b)))
+        }
+        #[inline(always)]
+        fn edges_f64(
+            self,
+            ax: __m128,
+            ay: __m128,
+            bx: __m128,
+            by: __m128,
+            cx: __m128,
+            cy: __m128,
+        ) -> [__m128; 3] {
+            let (ax, ay, bx, by, cx, cy) = (
+                widen(ax),
+                widen(ay),
+                widen(bx),
+                widen(by),
+                widen(cx),
+                widen(cy),
+            );
+            let e = |a: [__m128d; 2], b: [__m128d; 2], c: [__m128d; 2], d: [__m128d; 2]| {
+                let h = |k: usize| {
+                    sse!(_mm_cvtpd_ps(_mm_sub_pd(
+                        _mm_mul_pd(a[k], b[k]),
+                        _mm_mul_pd(c[k], d[k])
+                    )))
+                };
+                sse!(_mm_movelh_ps(h(0), h(1)))
+            };
+            [e(cx, by, cy, bx), e(ax, cy, ay, cx), e(bx, ay, by, ax)]
+        }
     }
 }
 

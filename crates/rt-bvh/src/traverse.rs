@@ -248,6 +248,8 @@ fn consider(best: &mut Hit, id: u32, t: f32, u: f32, v: f32) {
 }
 
 /// The wide traversal core, shared by closest hit (`ANY = false`) and any hit (`ANY = true`).
+/// `SORT = false` skips sorting the children a closest-hit ray enters (a switch to measure what
+/// the sorting gains; see [`BvhParams::sort_children`](crate::BvhParams::sort_children)).
 ///
 /// Each visit tests all children of a node with one slab test. Closest hit: the children
 /// entered are sorted by entry distance; the nearest is visited next and the others pushed with
@@ -256,7 +258,7 @@ fn consider(best: &mut Hit, id: u32, t: f32, u: f32, v: f32) {
 /// sorting (measured slower: it found hits no sooner); the children are pushed in lane order, and
 /// the first hit ends the walk. Leaves are tested when popped, like nodes.
 #[inline(always)]
-pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
+pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool, const SORT: bool>(
     simd: X,
     nodes: &[WideNode],
     leaves: &L,
@@ -287,6 +289,19 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
                     }
                 } else if mask & (mask - 1) == 0 {
                     current = node.child(mask.trailing_zeros() as usize);
+                    continue;
+                } else if !SORT {
+                    // Unsorted (only to measure what sorting gains): the first child entered
+                    // next, the others pushed in lane order with their entry distances.
+                    let t_entry = simd.store8(t_entry);
+                    let first = mask.trailing_zeros() as usize;
+                    let mut m = mask & (mask - 1);
+                    while m != 0 {
+                        let i = m.trailing_zeros() as usize;
+                        m &= m - 1;
+                        stack.push((node.children[i], t_entry[i]));
+                    }
+                    current = node.child(first);
                     continue;
                 } else {
                     // Insertion sort of the entered children, farthest first.

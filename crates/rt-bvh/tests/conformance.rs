@@ -1,6 +1,6 @@
-//! The conformance kit for every preset and, for the wide layout, every set of kernels (the
-//! portable ones are forced here, so the fallback is tested on every CI run, AVX2 or not), plus
-//! structural validation on the same scenes.
+//! The conformance kit for every preset and, for the wide layout, every set of kernels (SSE2
+//! and the portable ones are forced here, so the fallbacks are tested on every CI run, AVX2 or
+//! not), plus structural validation on the same scenes.
 
 use rt_bvh::{Bvh, BvhParams, Kernels};
 use rt_core::conformance::{self, SCENES};
@@ -14,6 +14,7 @@ fn wide_with(kernels: Kernels) -> BvhParams {
 }
 
 rt_core::conformance_tests!(wide, Bvh<Triangle>, BvhParams::wide());
+rt_core::conformance_tests!(wide_sse2, Bvh<Triangle>, wide_with(Kernels::Sse2));
 rt_core::conformance_tests!(wide_portable, Bvh<Triangle>, wide_with(Kernels::Portable));
 rt_core::conformance_tests!(wide_scalar, Bvh<Triangle>, wide_with(Kernels::Scalar));
 rt_core::conformance_tests!(
@@ -21,6 +22,15 @@ rt_core::conformance_tests!(
     Bvh<Triangle>,
     BvhParams {
         parallel: false,
+        ..BvhParams::wide()
+    }
+);
+rt_core::conformance_tests!(
+    wide_unsorted_closest_any,
+    Bvh<Triangle>,
+    BvhParams {
+        sort_children: false,
+        any_hit_path: false,
         ..BvhParams::wide()
     }
 );
@@ -34,6 +44,7 @@ fn spheres() {
     // Spheres are no triangles: the wide tree keeps them in primitive leaves.
     conformance::check_random_spheres::<Bvh<Sphere>>(&BvhParams::wide());
     conformance::check_random_spheres::<Bvh<Sphere>>(&wide_with(Kernels::Portable));
+    conformance::check_random_spheres::<Bvh<Sphere>>(&wide_with(Kernels::Sse2));
 }
 
 #[test]

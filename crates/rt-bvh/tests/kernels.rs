@@ -3,8 +3,9 @@
 //! millions of rays chosen where kernels go wrong: `±0` direction components, rays through
 //! shared edges and vertices, rays lying in the faces of node boxes, and random rays.
 //!
-//! The AVX2 kernels are compared when this CPU runs them (the test says so on stderr when it
-//! cannot, and fails under `CI=true` if the CPU is x86-64 with AVX2 and they were not run).
+//! The SSE2 kernels are compared on x86-64, the AVX2 ones when this CPU runs them (the test says
+//! so on stderr when it cannot, and fails under `CI=true` if the CPU is x86-64 with AVX2 and
+//! they were not run).
 
 use rt_bvh::{Bvh, BvhParams, Kernels};
 use rt_core::glam::Vec3;
@@ -142,6 +143,9 @@ fn compare<P: Primitive>(tree: &Bvh<P>, kernels: Kernels, rays: &[Ray]) -> usize
 fn simd_kernels() -> Vec<Kernels> {
     let mut k = vec![Kernels::Portable];
     let mut probe = Bvh::build(&[] as &[Triangle], &BvhParams::wide());
+    if probe.set_kernels(Kernels::Sse2) {
+        k.push(Kernels::Sse2);
+    }
     if probe.set_kernels(Kernels::Avx2) {
         k.push(Kernels::Avx2);
     } else {
@@ -172,8 +176,8 @@ fn scenes_for_kernels() -> Vec<(&'static str, Vec<Triangle>)> {
 
 #[test]
 fn simd_kernels_answer_bit_for_bit_like_the_scalar_ones() {
-    // 3 scenes × 2 tests × 2 kernel sets (on AVX2 machines) × 200k rays: 2.4 million rays, each
-    // traced four times (closest and any hit, SIMD and scalar).
+    // 3 scenes × 2 tests × 3 kernel sets (on AVX2 machines) × 200k rays: 3.6 million rays,
+    // each traced four times (closest and any hit, SIMD and scalar).
     const RAYS: usize = 200_000;
     let kernels = simd_kernels();
     for (name, tris) in scenes_for_kernels() {

@@ -46,7 +46,8 @@ pub struct Args {
     /// [default: all]
     #[arg(long, value_delimiter = ',')]
     pub structures: Vec<String>,
-    /// Threads for tracing [default: all cores]. Builds are single-threaded.
+    /// Threads for building and tracing [default: all cores]; structures that build in parallel
+    /// use them.
     #[arg(long)]
     pub threads: Option<usize>,
     /// Print one JSON object instead of the table.

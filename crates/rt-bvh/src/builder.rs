@@ -265,6 +265,11 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &BvhParams) -> Built<P> {
             set_child(&mut node, 0, &root.bounds, root_ref);
             o.nodes.push(node);
         }
+        // A sequential build grows both arrays by doubling; up to half of each would be unused
+        // capacity for the tree's lifetime (the bunny's wide tree took 7.0 MiB on 1 thread and
+        // 3.9 MiB on 2). Shrinking a large allocation is a remap, not a copy.
+        o.nodes.shrink_to_fit();
+        o.packs.shrink_to_fit();
         out.wide = o.nodes;
         out.packs = o.packs;
     } else {

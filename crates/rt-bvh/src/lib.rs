@@ -1,51 +1,137 @@
-//! A bounding volume hierarchy (BVH) for CPU ray tracing.
+//! A bounding volume hierarchy (BVH) for CPU ray tracing: by default an 8-wide tree traced with
+//! SIMD kernels chosen at run time, and the binary tree of the lectures as presets.
 //!
 //! # The structure
-//! A binary tree of axis-aligned boxes. Each interior node splits its primitives into two
-//! groups, and each group gets the tightest box around it; a leaf holds a few primitives. A
-//! ray only descends into children whose boxes it enters, so it tests a few dozen boxes and a
-//! handful of primitives instead of all of them. Unlike spatial subdivisions (kd-trees, grids),
-//! every primitive is in exactly one leaf: no duplicated references and no mailboxing, at the
-//! price of sibling boxes that may overlap.
+//! A tree of axis-aligned boxes. Each interior node splits its primitives into groups, and each
+//! group gets the tightest box around it; a leaf holds a few primitives. A ray only descends
+//! into children whose boxes it enters, so it tests a few dozen boxes and a handful of
+//! primitives instead of all of them. Unlike spatial subdivisions (kd-trees, grids), every
+//! primitive is in exactly one leaf: no duplicated references and no mailboxing, at the price
+//! of sibling boxes that may overlap.
 //!
-//! The tree is built top-down into a flat, depth-first array of 32-byte [`Node`]s (pbrt-v4's
-//! layout: the first child follows its parent, the second child's index is stored), and the
-//! primitives are reordered so that each leaf is a contiguous range.
+//! The same splits make two layouts ([`Layout`]):
+//! - **Binary** (presets `binary`, `median`, `middle`): two children per node, a flat
+//!   depth-first array of 32-byte [`Node`]s (pbrt-v4's layout: the first child follows its
+//!   parent, the second child's index is stored), primitives reordered so each leaf is a
+//!   contiguous range.
+//! - **Wide** (the default, preset `wide`): the binary split tree collapsed so that a node has up
+//!   to eight children, by splitting the child with the largest surface area until there are
+//!   eight (Wald et al. 2008; Embree's BVH8 builder), built directly without the binary tree in
+//!   between. One SIMD slab test handles all children of a node; triangles sit in leaves as
+//!   [`TriPack`]s of four, one SIMD triangle test per pack ("pre-processed triangles", memory
+//!   laid out by rate of access: the boxes a ray tests at every step, the triangles only in
+//!   leaves).
+//!
+//! # Layouts in bytes
+//! - [`Node`] (binary): 32 bytes — its box (24), second child or first primitive (4), primitive
+//!   count (2), split axis (1), padding (1). At most `2N - 1` nodes.
+//! - [`WideNode`]: 256 bytes, four cache lines, aligned to one — the children's boxes as six
+//!   rows of eight floats (minimum x, y, z, maximum x, y, z: 192), eight 32-bit [`ChildRef`]s
+//!   (32: a node index, or a leaf of up to eight items with its first item), and 32 bytes of
+//!   padding (without it, 224-byte nodes traced primary and shadow rays 2-3% slower).
+//! - [`TriPack`]: 160 bytes for four triangles, 40 per triangle — nine rows of four floats
+//!   (`v0`, `v1`, `v2` for the watertight test; `v0`, `e1`, `e2` for Möller–Trumbore) and four
+//!   32-bit input indices. Unused lanes hold NaN.
+//! - On the Stanford bunny the wide tree takes 3.9 MiB (59 bytes per triangle: 4,359 nodes and
+//!   18,535 packs), the binary tree 5.0 MiB (75 bytes per triangle, counting its copy of the
+//!   triangles and their indices).
 //!
 //! # Cost model
-//! - **Build**: O(N log N). Every node costs O(n) for its bounds and split choice (binning,
-//!   quickselect or partition), and there are O(log N) levels for balanced splits. Degenerate
-//!   input cannot make it worse than O(N · 64): once a subtree would not fit under the depth
-//!   limit [`MAX_DEPTH`] (the traversal stack size) it is split by count.
-//! - **Memory**: 32 bytes per node (at most `2N - 1` nodes), plus the reordered primitives and a
-//!   4-byte original index per primitive.
-//! - **Traversal step**: one node visit loads the node and tests both children's boxes (two slab
-//!   tests, six multiply-adds and a few compares each), then continues with the nearer child and
-//!   pushes the farther one; a leaf tests its primitives.
+//! - **Build**: O(N log N). Each set of primitives is binned once (SAH) and partitioned once,
+//!   and there are O(log N) levels for balanced splits; sets whose remaining depth budget only
+//!   just fits a balanced tree are split by count, so the depth never exceeds [`MAX_DEPTH`] and
+//!   degenerate input costs O(N · MAX_DEPTH) at worst. Scratch memory: 32 bytes per primitive,
+//!   plus, in the parallel build, the subtrees built as tasks until they are appended (up to a
+//!   second copy of the tree); measured below, a build peaks at about 160 bytes per triangle,
+//!   the finished tree included. Large inputs build on rayon's threads; the tree is the same,
+//!   byte for byte, on any number of threads.
+//! - **Memory**: see the layouts above.
+//! - **Traversal step** (wide): a node visit is one 8-lane slab test (six loads, subtractions,
+//!   multiplications and min/max, one compare and a mask: 256-bit operations with AVX2, two
+//!   128-bit halves with SSE2), then the children entered are sorted by entry distance (closest
+//!   hit) or pushed as they are (any hit). A leaf visit is one 4-lane triangle test per pack
+//!   (about forty vector operations; the watertight test skips its division when no lane can
+//!   hit). The binary step: two scalar slab tests, the nearer child next, the farther pushed.
+//! - **Stack**: fixed, `7 · MAX_DEPTH` entries of 8 bytes, not zeroed per ray.
+//!
+//! # Exactness
+//! Each SIMD lane performs the scalar test's operations in the scalar test's order (Rust never
+//! fuses a multiply and an add on its own), and the watertight test redoes an exactly zero edge
+//! function in `f64` as the scalar one does: the kernels answer like
+//! [`Triangle::intersect_watertight`](rt_core::Triangle::intersect_watertight) (or
+//! [`rt_core::moller_trumbore_edges`] for [`MtTriangle`](rt_core::MtTriangle)) bit for bit. The
+//! tie rule (smallest `t`, then smallest index) holds across lanes, packs and nodes.
+//! Bit-identical copies of a triangle are stored once (only the smallest index can ever win),
+//! so a million copies cost a ray one test instead of a million. A ray outside the precondition
+//! of [`Accel`] (NaN, an origin beyond [`Ray::MAX_ORIGIN`], ...) returns before the root.
+//!
+//! # Kernels and dispatch ([`Kernels`])
+//! A plain `cargo build` runs the fastest the CPU has: the wide traversal is compiled once
+//! inside a function with AVX2 and FMA enabled (chosen after `is_x86_feature_detected!`), once
+//! with SSE2 intrinsics (every x86-64 CPU) and once on plain arrays (any target, what aarch64
+//! runs). [`Bvh::set_kernels`] or [`BvhParams::kernels`] force one; `Scalar` tests each triangle
+//! with rt-core's scalar functions, the reference the others are tested against. The only
+//! `unsafe` code is in `src/simd.rs`, each block with its reason.
 //!
 //! # Tuning knobs ([`BvhParams`])
+//! - `layout`: [`Layout::Wide`] (default) or [`Layout::Binary`].
 //! - [`SplitMethod`]: binned SAH (the default; Wald 2007, pbrt-v4 §7.3), median split by count
 //!   (quickselect along the longest centroid axis), or middle of the centroid extent (pbrt's
-//!   `Middle`). The presets `sah`, `median` and `middle` select them.
-//! - `bins`: SAH buckets per axis (16; Wald 2007 finds 16–32 within a few percent of a full sweep).
-//! - `traversal_cost` / `intersection_cost`: the SAH constants, relative cost of stepping into a
-//!   node and of one primitive test (1 and 1 here; pbrt-v4 uses 1/2 and 1).
-//! - `max_leaf_size`: the most primitives a leaf may hold (8 for SAH, 4 for the others).
+//!   `Middle`).
+//! - `bins`: at most this many SAH buckets per axis (16); a set of `n` primitives gets
+//!   `min(bins, 4 + n / 20)`, Embree's rule (Wald 2007 finds 16-32 within a few percent of a
+//!   full sweep).
+//! - `traversal_cost` / `intersection_cost`: the SAH constants (1 and 1; pbrt-v4 uses 1/2 and
+//!   1). In the wide tree a leaf is priced by its packs of four, as Embree does.
+//! - `max_leaf_size`: the most primitives a leaf may hold (8; at most 32 triangles, or 8 other
+//!   primitives, in the wide tree).
+//! - `parallel` (true): build large inputs on rayon's threads.
+//! - `sort_children`, `any_hit_path` (true): switch off the nearest-first order and the any-hit
+//!   path, only to measure what they gain (see below).
 //!
 //! # Measured
-//! On the Stanford bunny (69,451 triangles), `cargo xtask compare --scene
-//! ../shared/meshes/stanford-bunny.obj` (1024×768 primary rays, 2 threads):
+//! Against Embree 3.13 (build quality medium, its default; scene flags default), single-threaded
+//! traces of the same triangles and rays (1024×768 per set), one run of `cargo bench -p
+//! rt-benches --features embree --bench peers` (medians of 5 interleaved passes; speed ÷
+//! Embree's):
 //!
-//! | preset | build ms | nodes | depth | visits/ray | tests/ray | Mrays/s |
-//! | --- | ---: | ---: | ---: | ---: | ---: | ---: |
-//! | `sah` | 42.1 | 77,359 | 19 | 6.8 | 0.8 | 20.6 |
-//! | `median` | 14.1 | 40,597 | 15 | 8.0 | 2.4 | 14.2 |
-//! | `middle` | 14.1 | 44,817 | 20 | 7.4 | 1.8 | 16.8 |
+//! | scene | primary | incoherent | shadow | build, 1 thread (Embree's time ÷ ours) |
+//! | --- | ---: | ---: | ---: | ---: |
+//! | bunny | 1.22 | 0.83 | 1.05 | 1.00 |
+//! | teapot | 1.40 | 0.86 | 1.08 | 1.05 |
+//! | sphereflake | 1.32 | 0.84 | 1.00 | 1.09 |
+//! | teapot in a stadium | 1.38 | 0.89 | 1.21 | 1.02 |
+//! | **geometric mean** | **1.33** | **0.86** | **1.08** | 1.04 |
 //!
-//! Single-threaded on the same triangles and rays at 512×384, one run of `cargo bench -p
-//! rt-benches --bench trace` gives the SAH tree 1.15× the speed of `obvhs` (PLOC with
-//! reinsertion, its slow preset) on the bunny and 0.90× on the sphereflake, and 2.7–3.1× that of
-//! the `bvh` crate; its build takes 36.3 ms on the bunny against obvhs' 19.5 ms (medium preset).
+//! In the same run `Bvh<MtTriangle>` (Möller–Trumbore packs) reached 1.48 / 0.99 / 1.23, and
+//! the binary tree 0.77 / 0.40 / 0.44. Builds on 2 threads were 1.82× faster than on one on the
+//! bunny (10.9 against 19.8 ms; Embree 2.00×) and 1.71× on the sphereflake (Embree 1.70×).
+//!
+//! What each step from the binary tree gained, single-threaded, speed ÷ the binary tree's,
+//! `cargo run --release -p rt-bvh --example steps` (medians of 3 interleaved passes; each row
+//! adds one step to the row above; the example prints the teapot and the teapot in a stadium
+//! too):
+//!
+//! | step | bunny: primary / incoherent / shadow | sphereflake: primary / incoherent / shadow |
+//! | --- | --- | --- |
+//! | binary (12.4 / 2.69 / 2.72 Mrays/s; 15.7 / 3.39 / 5.03) | 1 / 1 / 1 | 1 / 1 / 1 |
+//! | wide nodes, one 8-lane slab test per node; triangles one at a time (the scalar reference) | 0.41 / 0.91 / 0.72 | 0.47 / 0.89 / 0.61 |
+//! | + SoA packs, four triangles per test (plain arrays) | 0.70 / 1.45 / 1.33 | 0.76 / 1.43 / 1.04 |
+//! | + SSE2 intrinsics | 1.05 / 1.93 / 2.14 | 1.12 / 1.87 / 1.61 |
+//! | + AVX2 intrinsics (runtime dispatch) | 1.22 / 2.15 / 2.40 | 1.31 / 1.89 / 1.79 |
+//! | + nearest-first order of the children | 1.84 / 2.33 / 2.30 | 1.80 / 2.16 / 1.90 |
+//! | + any-hit path: no sorting, first hit ends (default) | 1.82 / 2.31 / 3.19 | 1.80 / 2.09 / 2.42 |
+//!
+//! Wide nodes alone do not pay: the wins come with the SIMD leaves and the ordering. Counted in
+//! `cargo xtask compare --scene ../shared/meshes/stanford-bunny.obj` (1024×768 primary rays),
+//! the wide tree visits 3.0 nodes and tests 2.25 triangles per ray, the binary one 6.7 and
+//! 0.793: fewer, larger steps.
+//!
+//! At scale, `cargo run --release -p rt-bvh --example large` (height fields; one run, each time
+//! the fastest of three builds): 10 million triangles build in 3.55 s on one thread and 2.45 s
+//! on two, into 535 MiB (56 bytes per triangle; the binary tree 722 MiB), and one build, alone
+//! in a fresh process, held at most 157 bytes per triangle beyond its input, the tree included.
+//! A million copies of one triangle cost one closest-hit ray 2 visits and 1 test.
 //!
 //! # Example
 //! ```
@@ -56,7 +142,7 @@
 //!     Triangle::new(Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::new(0.0, 1.0, 0.0)),
 //!     Triangle::new(Vec3::new(-1.0, -1.0, 3.0), Vec3::new(1.0, -1.0, 3.0), Vec3::new(0.0, 1.0, 3.0)),
 //! ];
-//! let bvh = Bvh::build(&tris, &BvhParams::sah());
+//! let bvh = Bvh::build(&tris, &BvhParams::default()); // the wide tree
 //! let hit = bvh.intersect(&Ray::new(Vec3::new(0.0, 0.0, 5.0), -Vec3::Z)).unwrap();
 //! assert_eq!((hit.prim, hit.t), (1, 2.0));
 //! assert!(bvh.validate().is_ok());
@@ -69,7 +155,7 @@
 //! use rt_core::{Accel, Ray, glam::Vec3};
 //!
 //! let mesh = rt_core::load_obj("bunny.obj")?; // typed error naming file and line
-//! let bvh = Bvh::build(&mesh.triangles(), &BvhParams::sah());
+//! let bvh = Bvh::build(&mesh.triangles(), &BvhParams::default());
 //! let ray = Ray::new(Vec3::new(0.0, 0.1, 1.0), Vec3::new(0.0, 0.0, -1.0));
 //! if let Some(hit) = bvh.intersect(&ray) {
 //!     // closest hit: triangle index, t, u, v
@@ -80,6 +166,7 @@
 //! # Ok(())
 //! # }
 //! ```
+
 #![warn(missing_docs)]
 
 mod builder;

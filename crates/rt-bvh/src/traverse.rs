@@ -16,9 +16,13 @@ impl<P: Primitive> Bvh<P> {
     /// nearer child is visited next and the farther one is pushed with its entry distance, and
     /// skipped when popped if a hit closer than that entry has been found meanwhile
     /// (front-to-back traversal; the comparison allows [`SLAB_FAR_SCALE`] of rounding, as the box
-    /// test does, so a primitive tying with the best hit is still found). The stack holds at most one entry per tree level, and the
-    /// builder bounds the depth by `MAX_DEPTH`, so a fixed array suffices.
-    #[inline(always)]
+    /// test does, so a primitive tying with the best hit is still found). The stack holds at most
+    /// one entry per tree level, and the builder bounds the depth by `MAX_DEPTH`, so a fixed
+    /// array suffices.
+    // PERF: kept out of line: inlined into the query beside every wide traversal, it ran 1.16x
+    // (bunny) and 1.21x (sphereflake) slower than the same loop written alone; out of line it
+    // runs 1.03x and 1.00x of it (`cargo bench -p rt-benches --bench stats -- stats-sink/`).
+    #[inline(never)]
     pub(crate) fn traverse_binary<S: Stats, const ANY: bool>(
         &self,
         ray: &Ray,

@@ -36,11 +36,15 @@
 //! and corners are handled exactly; see `traverse.rs`.
 //!
 //! # Measured
-//! One run each of `cargo xtask compare --scene S --rays R --structures
-//! bvh,kdtree,grid,grid-nomailbox` (1024×768 rays, 2 threads, 0 mismatches everywhere); tests
-//! and Mrays/s per ray kind:
+//! The BVH in this section is the binary SAH tree: the `bvh` row when these figures were
+//! measured, `bvh-binary` since rt-bvh's default became its 8-wide tree (faster still; see
+//! rt-bvh's documentation).
 //!
-//! | scene, rays | bvh | kdtree | grid | grid without mailbox |
+//! One run each of `cargo xtask compare --scene S --rays R --structures
+//! bvh-binary,kdtree,grid,grid-nomailbox` (1024×768 rays, 2 threads, 0 mismatches
+//! everywhere); tests and Mrays/s per ray kind:
+//!
+//! | scene, rays | bvh-binary | kdtree | grid | grid without mailbox |
 //! | --- | --- | --- | --- | --- |
 //! | `random-soup` (20k random triangles), primary | 3.62 / 7.00 | 1.35 / 10.7 | 2.37 / 9.78 | 3.69 / 8.25 |
 //! | `random-soup`, incoherent | 12.5 / 1.06 | 3.65 / 1.65 | 7.63 / 3.16 | 10.9 / 2.42 |
@@ -61,9 +65,10 @@
 //!
 //! Exact insertion against listing every cell of a primitive's box (`GridParams::bbox_insertion`,
 //! row `grid-bbox`), one run of `cargo xtask compare --scene random-soup --structures
-//! bvh,grid,grid-bbox`: 11.1 against 31.9 references per triangle, 2.36 against 6.65 tests per
-//! primary ray, 12.1 against 6.37 Mrays/s, for a build of 51 against 5 ms. On the bunny, whose
-//! triangles are small next to the cells, 2.68 against 3.17 references per triangle.
+//! bvh-binary,grid,grid-bbox`: 11.1 against 31.9 references per triangle, 2.36 against 6.65
+//! tests per primary ray, 12.1 against 6.37 Mrays/s, for a build of 51 against 5 ms. On the
+//! bunny, whose triangles are small next to the cells, 2.68 against 3.17 references per
+//! triangle.
 //!
 //! `density` trades cells for tests. `cargo run --release -p rt-grid --example density_sweep`
 //! (bunny, 512×384 primary rays, single-threaded, one run): λ = 1 gives 69k cells and 13.6 tests

@@ -34,11 +34,16 @@
 //! cells beside the path are tested too — a parent cell there by its whole list.
 //!
 //! # Measured
-//! One run each of `cargo xtask compare --scene S --rays R --structures
-//! bvh,kdtree,grid,grid-nomailbox,hgrid` (1024×768 rays, 2 threads, 0 mismatches in all twelve
-//! runs over the four scenes and three ray kinds); primitive tests per ray / Mrays/s / MiB:
+//! The BVH in this section is the binary SAH tree: the `bvh` row when these figures were
+//! measured, `bvh-binary` since rt-bvh's default became its 8-wide tree (faster still; see
+//! rt-bvh's documentation).
 //!
-//! | scene, rays | bvh | grid | hgrid |
+//! One run each of `cargo xtask compare --scene S --rays R --structures
+//! bvh-binary,kdtree,grid,grid-nomailbox,hgrid` (1024×768 rays, 2 threads, 0 mismatches in all
+//! twelve runs over the four scenes and three ray kinds); primitive tests per ray / Mrays/s /
+//! MiB:
+//!
+//! | scene, rays | bvh-binary | grid | hgrid |
 //! | --- | --- | --- | --- |
 //! | `teapot-in-stadium`, primary | 2.04 / 7.93 / 3.29 | 533 / 0.191 / 2.63 | 3.71 / 3.15 / 3.53 |
 //! | `teapot-in-stadium`, shadow | 0.690 / 10.4 | 289 / 0.247 | 3.71 / 2.55 |
@@ -50,11 +55,11 @@
 //! On the teapot in a stadium the uniform grid's cells sized for the stadium hold thousands of
 //! the teapot's triangles; the hierarchical grid needs 1/144 of its primitive tests per primary
 //! ray with 1.34× its memory and runs 16× faster. In one run of `cargo xtask compare --scene
-//! teapot-in-stadium --structures bvh,grid,hgrid,hgrid-lean`, [`HGridParams::lean`] takes 2.57
-//! MiB, less than the grid's 2.63, for 11.9 tests per ray against the grid's 533 (1/45; 3.03
-//! against 0.208 Mrays/s). Where primitives are spread evenly (`random-soup`) the refinement buys
-//! nothing and the uniform grid is better; on surfaces (bunny, sphereflake) both grids trail the
-//! BVH.
+//! teapot-in-stadium --structures bvh-binary,grid,hgrid,hgrid-lean`, [`HGridParams::lean`]
+//! takes 2.57 MiB, less than the grid's 2.63, for 11.9 tests per ray against the grid's 533
+//! (1/45; 3.03 against 0.208 Mrays/s). Where primitives are spread evenly (`random-soup`) the
+//! refinement buys nothing and the uniform grid is better; on surfaces (bunny, sphereflake) both
+//! grids trail the BVH.
 //!
 //! # Example
 //! ```

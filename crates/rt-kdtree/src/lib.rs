@@ -60,6 +60,10 @@
 //! Any-hit queries return at the first hit in the ray's interval.
 //!
 //! # Measured
+//! The BVH in this section is the binary SAH tree: the `bvh` row when these figures were
+//! measured, `bvh-binary` since rt-bvh's default became its 8-wide tree (faster still; see
+//! rt-bvh's documentation).
+//!
 //! Stanford bunny (69,451 triangles), one run of `cargo xtask compare --scene
 //! ../shared/meshes/stanford-bunny.obj` (1024×768 primary rays, 2 threads, builds on 2 threads,
 //! fastest of 3), with the SAH BVH for reference:
@@ -71,7 +75,7 @@
 //! | `kdtree-restart` | 199.7 | 10.27 | 822,567 | 28 | 57.4% | 2.42 | 6.09 | 40.3 | 0.774 | 6.69 |
 //! | `kdtree-noclip` | 228.0 | 12.24 | 980,053 | 28 | 37.4% | 2.03 | 8.98 | 16.1 | 0.814 | 11.1 |
 //! | `kdtree-pbrt` | 107.8 | 4.34 | 149,303 | 29 | 44.7% | 5.19 | 3.09 | 16.6 | 4.54 | 8.24 |
-//! | `bvh` | 42.1 | 5.01 | 77,359 | 19 | 0% | 1.80 | 1.00 | 6.8 | 0.793 | 17.4 |
+//! | `bvh` (binary, now `bvh-binary`) | 42.1 | 5.01 | 77,359 | 19 | 0% | 1.80 | 1.00 | 6.8 | 0.793 | 17.4 |
 //!
 //! The default tree tests fewer triangles per primary ray than the SAH BVH (0.764 against
 //! 0.793). Perfect splits save 6% of the tests and 16% of the memory and make the tree 1.3×

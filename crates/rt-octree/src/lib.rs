@@ -73,11 +73,15 @@
 //! for a scene, with the uniform grid as the first row.
 //!
 //! # Measured
-//! One run each of `cargo xtask compare --scene S --rays R --structures
-//! bvh,kdtree,grid,hgrid,octree,octree-lean` (1024×768 rays, 2 threads, 0 mismatches in every
-//! run). The figures are cell visits per ray / primitive tests per ray / Mrays/s / MiB:
+//! The BVH in this section is the binary SAH tree: the `bvh` row when these figures were
+//! measured, `bvh-binary` since rt-bvh's default became its 8-wide tree (faster still; see
+//! rt-bvh's documentation).
 //!
-//! | scene, rays | bvh | grid | octree | octree-lean |
+//! One run each of `cargo xtask compare --scene S --rays R --structures
+//! bvh-binary,kdtree,grid,hgrid,octree,octree-lean` (1024×768 rays, 2 threads, 0 mismatches in
+//! every run). The figures are cell visits per ray / primitive tests per ray / Mrays/s / MiB:
+//!
+//! | scene, rays | bvh-binary | grid | octree | octree-lean |
 //! | --- | --- | --- | --- | --- |
 //! | bunny, primary | 6.8 / 0.793 / 21.0 / 5.01 | 14.2 / 6.67 / 4.36 / 4.15 | 5.7 / 3.43 / 8.15 / 4.90 | 5.3 / 6.74 / 7.04 / 3.77 |
 //! | `teapot-in-stadium`, primary | 15.4 / 2.04 / 13.9 / 3.29 | 26.1 / 533 / 0.222 / 2.63 | 14.8 / 4.13 / 4.10 / 2.37 | 14.5 / 6.09 / 4.72 / 2.27 |
@@ -97,7 +101,7 @@
 //! against 1.64 Mrays/s in a run with every row).
 //!
 //! Single-threaded, in criterion (`cargo bench -p rt-benches --bench trace --
-//! "(build|trace-primary)/bunny/(rt-bvh/(sah|watertight)|rt-grid|rt-octree)"`, medians, 512×384
+//! "(build|trace-primary)/bunny/(rt-bvh/binary|rt-grid|rt-octree)"`, medians, 512×384
 //! primary rays): the bunny's octree builds in 148.8 ms (95.9 ms in parallel on 2 threads)
 //! against the SAH BVH's 34.8 ms and the grid's 25.8 ms, and traces in 61.8 ms against the BVH's
 //! 23.2 ms and the grid's 90.1 ms.

@@ -223,16 +223,9 @@ impl Simd for Portable {
 
 /// What the kernels need of a ray, computed once per ray: broadcast into vectors where the
 /// kernels use it lane-wise.
-#[derive(Clone, Copy, Debug)]
+#[derive(Clone, Copy)]
 pub(crate) struct RayData<S: Simd> {
-    pub origin: [S::F8; 3],
-    pub inv_dir: [S::F8; 3],
-    pub t_min8: S::F8,
-    /// Per axis, the [`WideNode::bounds`] row of the near and of the far slab plane (the minimum
-    /// row for a positive reciprocal direction, the maximum row for a negative one, `-0`
-    /// included).
-    pub near: [usize; 3],
-    pub far: [usize; 3],
+    pub boxes: BoxRay<S>,
     pub shear: Shear,
     /// The origin along the shear's axes kx, ky, kz, the shear factors, and `t_min`, as
     /// four-lane vectors for the watertight test.
@@ -244,7 +237,20 @@ pub(crate) struct RayData<S: Simd> {
     pub t_min4: S::F4,
 }
 
-impl<S: Simd> RayData<S> {
+/// What the slab test needs of a ray, as eight-lane vectors.
+#[derive(Clone, Copy)]
+pub(crate) struct BoxRay<S: Simd> {
+    pub origin: [S::F8; 3],
+    pub inv_dir: [S::F8; 3],
+    pub t_min8: S::F8,
+    /// Per axis, the [`WideNode::bounds`] row of the near and of the far slab plane (the minimum
+    /// row for a positive reciprocal direction, the maximum row for a negative one, `-0`
+    /// included).
+    pub near: [usize; 3],
+    pub far: [usize; 3],
+}
+
+impl<S: Simd> BoxRay<S> {
     #[inline(always)]
     pub fn new(simd: S, ray: &Ray) -> Self {
         let mut near = [0; 3];
@@ -254,18 +260,30 @@ impl<S: Simd> RayData<S> {
             near[a] = a + 3 * neg as usize;
             far[a] = a + 3 * (!neg) as usize;
         }
-        let shear = Shear::new(ray.dir);
-        let (o, d, inv) = (ray.origin, ray.dir, ray.inv_dir);
+        let (o, inv) = (ray.origin, ray.inv_dir);
         // Written out lane by lane: closures passed to `array::map` are not inlined into the
         // AVX2 entry point, and the broadcasts then run as calls (measured: a third of the cost
         // of a ray that misses the root).
-        let (s8, s4) = (|x| simd.splat8(x), |x| simd.splat4(x));
+        let s8 = |x| simd.splat8(x);
         Self {
             origin: [s8(o.x), s8(o.y), s8(o.z)],
             inv_dir: [s8(inv.x), s8(inv.y), s8(inv.z)],
             t_min8: s8(ray.t_min),
             near,
             far,
+        }
+    }
+}
+
+impl<S: Simd> RayData<S> {
+    /// The ray's data for the whole traversal, from its slab-test part.
+    #[inline(always)]
+    pub fn new(simd: S, ray: &Ray, boxes: BoxRay<S>) -> Self {
+        let shear = Shear::new(ray.dir);
+        let (o, d) = (ray.origin, ray.dir);
+        let s4 = |x| simd.splat4(x);
+        Self {
+            boxes,
             shear,
             o4: [s4(o[shear.kx]), s4(o[shear.ky]), s4(o[shear.kz])],
             s4: [s4(shear.sx), s4(shear.sy), s4(shear.sz)],
@@ -284,7 +302,7 @@ impl<S: Simd> RayData<S> {
 /// comparisons that ignore NaN (an origin in a face plane with a zero direction component), the
 /// far end widened by [`SLAB_FAR_SCALE`]. Empty lanes (`+inf` minimum, `-inf` maximum) never pass.
 #[inline(always)]
-pub(crate) fn slab8<S: Simd>(s: S, node: &WideNode, r: &RayData<S>, t_max: f32) -> (u32, S::F8) {
+pub(crate) fn slab8<S: Simd>(s: S, node: &WideNode, r: &BoxRay<S>, t_max: f32) -> (u32, S::F8) {
     let mut t0 = r.t_min8;
     let mut t1 = s.splat8(t_max);
     for a in 0..3 {

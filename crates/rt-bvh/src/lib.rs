@@ -97,15 +97,15 @@
 //!
 //! | scene | primary | incoherent | shadow | build, 1 thread (Embree's time ÷ ours) |
 //! | --- | ---: | ---: | ---: | ---: |
-//! | bunny | 1.22 | 0.83 | 1.05 | 1.00 |
-//! | teapot | 1.40 | 0.86 | 1.08 | 1.05 |
-//! | sphereflake | 1.32 | 0.84 | 1.00 | 1.09 |
-//! | teapot in a stadium | 1.38 | 0.89 | 1.21 | 1.02 |
-//! | **geometric mean** | **1.33** | **0.86** | **1.08** | 1.04 |
+//! | bunny | 1.28 | 0.91 | 1.07 | 1.06 |
+//! | teapot | 1.46 | 0.91 | 1.10 | 1.08 |
+//! | sphereflake | 1.41 | 0.89 | 1.03 | 1.04 |
+//! | teapot in a stadium | 1.40 | 0.91 | 1.24 | 1.01 |
+//! | **geometric mean** | **1.39** | **0.90** | **1.11** | 1.04 |
 //!
-//! In the same run `Bvh<MtTriangle>` (Möller–Trumbore packs) reached 1.48 / 0.99 / 1.23, and
-//! the binary tree 0.77 / 0.40 / 0.44. Builds on 2 threads were 1.82× faster than on one on the
-//! bunny (10.9 against 19.8 ms; Embree 2.00×) and 1.71× on the sphereflake (Embree 1.70×).
+//! In the same run `Bvh<MtTriangle>` (Möller–Trumbore packs) reached 1.47 / 0.99 / 1.17, and
+//! the binary tree 0.74 / 0.39 / 0.44. Builds on 2 threads were 1.85× faster than on one on the
+//! bunny (10.9 against 20.2 ms; Embree 2.03×) and 1.77× on the sphereflake (Embree 1.98×).
 //!
 //! What each step from the binary tree gained, single-threaded, speed ÷ the binary tree's,
 //! `cargo run --release -p rt-bvh --example steps` (medians of 3 interleaved passes; each row
@@ -114,13 +114,13 @@
 //!
 //! | step | bunny: primary / incoherent / shadow | sphereflake: primary / incoherent / shadow |
 //! | --- | --- | --- |
-//! | binary (12.4 / 2.69 / 2.72 Mrays/s; 15.7 / 3.39 / 5.03) | 1 / 1 / 1 | 1 / 1 / 1 |
-//! | wide nodes, one 8-lane slab test per node; triangles one at a time (the scalar reference) | 0.41 / 0.91 / 0.72 | 0.47 / 0.89 / 0.61 |
-//! | + SoA packs, four triangles per test (plain arrays) | 0.70 / 1.45 / 1.33 | 0.76 / 1.43 / 1.04 |
-//! | + SSE2 intrinsics | 1.05 / 1.93 / 2.14 | 1.12 / 1.87 / 1.61 |
-//! | + AVX2 intrinsics (runtime dispatch) | 1.22 / 2.15 / 2.40 | 1.31 / 1.89 / 1.79 |
-//! | + nearest-first order of the children | 1.84 / 2.33 / 2.30 | 1.80 / 2.16 / 1.90 |
-//! | + any-hit path: no sorting, first hit ends (default) | 1.82 / 2.31 / 3.19 | 1.80 / 2.09 / 2.42 |
+//! | binary (12.5 / 2.43 / 2.77 Mrays/s; 17.0 / 3.67 / 4.95) | 1 / 1 / 1 | 1 / 1 / 1 |
+//! | wide nodes, one 8-lane slab test per node; triangles one at a time (the scalar reference) | 0.41 / 0.97 / 0.72 | 0.45 / 0.81 / 0.63 |
+//! | + SoA packs, four triangles per test (plain arrays) | 0.71 / 1.59 / 1.30 | 0.73 / 1.28 / 1.05 |
+//! | + SSE2 intrinsics | 1.07 / 2.20 / 2.11 | 1.09 / 1.75 / 1.67 |
+//! | + AVX2 intrinsics (runtime dispatch) | 1.22 / 2.40 / 2.41 | 1.21 / 1.88 / 1.85 |
+//! | + nearest-first order of the children | 1.86 / 2.40 / 2.30 | 1.69 / 2.12 / 1.90 |
+//! | + any-hit path: no sorting, first hit ends (default) | 1.82 / 2.54 / 3.13 | 1.70 / 2.15 / 2.42 |
 //!
 //! Wide nodes alone do not pay: the wins come with the SIMD leaves and the ordering. Counted in
 //! `cargo xtask compare --scene ../shared/meshes/stanford-bunny.obj` (1024×768 primary rays),

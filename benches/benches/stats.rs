@@ -7,7 +7,8 @@
 //! The wide tree's group (`stats-sink-wide`) compares `no-stats` with `counters` only.
 //! Run with `cargo bench -p rt-benches --bench stats`.
 
-use criterion::{Criterion, Throughput, criterion_group, criterion_main};
+use criterion::measurement::WallTime;
+use criterion::{BenchmarkGroup, Criterion, Throughput, criterion_group, criterion_main};
 use rt_benches::scenes;
 use rt_bvh::{Bvh, BvhParams, MAX_DEPTH};
 use rt_core::{Accel, Counters, Hit, Primitive, Ray, SLAB_FAR_SCALE, Triangle};
@@ -76,6 +77,28 @@ fn control(bvh: &Bvh<Triangle>, ray: &Ray) -> Option<Hit> {
     }
 }
 
+/// The `no-stats` and `counters` rows of one tree: the same traversal with the no-op sink and
+/// with counters.
+fn sink_pair(g: &mut BenchmarkGroup<'_, WallTime>, tree: &Bvh<Triangle>, rays: &[Ray]) {
+    g.bench_function("no-stats", |b| {
+        b.iter(|| {
+            rays.iter()
+                .filter(|r| black_box(tree).intersect(r).is_some())
+                .count()
+        })
+    });
+    g.bench_function("counters", |b| {
+        b.iter(|| {
+            let mut c = Counters::default();
+            let hits = rays
+                .iter()
+                .filter(|r| black_box(tree).intersect_with(r, &mut c).is_some())
+                .count();
+            (hits, c)
+        })
+    });
+}
+
 fn benches(c: &mut Criterion) {
     for scene in scenes() {
         let rays = scene.primary_rays(512, 384);
@@ -87,23 +110,7 @@ fn benches(c: &mut Criterion) {
         let mut g = c.benchmark_group(format!("stats-sink/{}", scene.name));
         g.sample_size(20);
         g.throughput(Throughput::Elements(rays.len() as u64));
-        g.bench_function("no-stats", |b| {
-            b.iter(|| {
-                rays.iter()
-                    .filter(|r| black_box(&bvh).intersect(r).is_some())
-                    .count()
-            })
-        });
-        g.bench_function("counters", |b| {
-            b.iter(|| {
-                let mut c = Counters::default();
-                let hits = rays
-                    .iter()
-                    .filter(|r| black_box(&bvh).intersect_with(r, &mut c).is_some())
-                    .count();
-                (hits, c)
-            })
-        });
+        sink_pair(&mut g, &bvh, &rays);
         g.bench_function("no-sink-control", |b| {
             b.iter(|| {
                 rays.iter()
@@ -119,23 +126,7 @@ fn benches(c: &mut Criterion) {
         let mut g = c.benchmark_group(format!("stats-sink-wide/{}", scene.name));
         g.sample_size(20);
         g.throughput(Throughput::Elements(rays.len() as u64));
-        g.bench_function("no-stats", |b| {
-            b.iter(|| {
-                rays.iter()
-                    .filter(|r| black_box(&wide).intersect(r).is_some())
-                    .count()
-            })
-        });
-        g.bench_function("counters", |b| {
-            b.iter(|| {
-                let mut c = Counters::default();
-                let hits = rays
-                    .iter()
-                    .filter(|r| black_box(&wide).intersect_with(r, &mut c).is_some())
-                    .count();
-                (hits, c)
-            })
-        });
+        sink_pair(&mut g, &wide, &rays);
         g.finish();
     }
 }

@@ -120,22 +120,15 @@ fn options() -> Options {
         scenes: Vec::new(),
         json: None,
     };
-    let mut args = std::env::args().skip(1);
-    while let Some(a) = args.next() {
-        let mut value = |what: &str| {
-            args.next()
-                .unwrap_or_else(|| panic!("{what} needs a value"))
-        };
-        match a.as_str() {
-            "--passes" => o.passes = value("--passes").parse().expect("--passes N"),
-            "--width" => o.width = value("--width").parse().expect("--width N"),
-            "--height" => o.height = value("--height").parse().expect("--height N"),
-            "--scenes" => {
-                o.scenes = value("--scenes").split(',').map(str::to_string).collect();
-            }
-            "--json" => o.json = Some(value("--json")),
-            // `cargo bench` passes `--bench`; other harness flags do not apply here.
-            _ => {}
+    for (flag, value) in rt_benches::flag_values() {
+        let number = |what: &str| -> u32 { value.parse().unwrap_or_else(|_| panic!("{what} N")) };
+        match flag.as_str() {
+            "--passes" => o.passes = number("--passes") as usize,
+            "--width" => o.width = number("--width"),
+            "--height" => o.height = number("--height"),
+            "--scenes" => o.scenes = value.split(',').map(str::to_string).collect(),
+            "--json" => o.json = Some(value),
+            _ => panic!("unknown flag {flag}"),
         }
     }
     o.passes = o.passes.max(1);

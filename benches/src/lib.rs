@@ -47,6 +47,7 @@ impl BenchScene {
     ) -> Vec<Ray> {
         raygen::rays_of_kind(
             kind,
+            &self.triangles,
             &self.camera(width, height),
             &self.bounds(),
             (width, height),
@@ -99,5 +100,24 @@ pub fn peer_scenes() -> Vec<BenchScene> {
     out.extend(shared("teapot", "teapot.obj"));
     out.push(builtin("sphereflake"));
     out.push(builtin("teapot-in-stadium"));
+    out
+}
+
+/// The `--name value` pairs on the command line of a benchmark with its own harness, in order.
+/// `cargo bench` adds `--bench`, which takes no value and is skipped, as is anything else that
+/// does not start with `--`.
+///
+/// # Panics
+/// If a flag other than `--bench` has no value after it.
+pub fn flag_values() -> Vec<(String, String)> {
+    let mut out = Vec::new();
+    let mut args = std::env::args().skip(1);
+    while let Some(a) = args.next() {
+        if a == "--bench" || !a.starts_with("--") {
+            continue;
+        }
+        let value = args.next().unwrap_or_else(|| panic!("{a} needs a value"));
+        out.push((a, value));
+    }
     out
 }

@@ -411,6 +411,7 @@ fn make_rays(
     };
     let rays = raygen::rays_of_kind(
         shared_kind,
+        tris,
         &camera,
         bounds,
         (args.width, args.height),
@@ -627,16 +628,16 @@ mod tests {
     use rt_core::{BuildStats, Stats};
 
     /// A structure that is wrong on purpose: it loses every hit on an even primitive.
-    struct LosesEvenHits(Bvh<Triangle>);
+    struct LosesEvenHits<P: rt_core::Primitive>(Bvh<P>);
 
-    impl Accel for LosesEvenHits {
-        type Prim = Triangle;
+    impl<P: rt_core::Primitive> Accel for LosesEvenHits<P> {
+        type Prim = P;
         type Params = ();
         const NAME: &'static str = "broken";
         fn presets() -> Vec<(&'static str, ())> {
             vec![("default", ())]
         }
-        fn build(prims: &[Triangle], _: &()) -> Self {
+        fn build(prims: &[P], _: &()) -> Self {
             Self(Bvh::build(prims, &BvhParams::sah()))
         }
         fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
@@ -683,7 +684,10 @@ mod tests {
             "1",
         ]);
         let mut entries = structures::all();
-        entries.push(structures::entry_of::<LosesEvenHits>());
+        entries.push(structures::entry_of::<
+            LosesEvenHits<Triangle>,
+            LosesEvenHits<rt_core::Shape>,
+        >());
         let report = measure(&a, 1, entries).unwrap();
         let broken = report.rows.iter().find(|r| r.name == "broken").unwrap();
         let bvh = report.rows.iter().find(|r| r.name == "bvh").unwrap();

@@ -2,8 +2,11 @@
 //!
 //! One module per task, as in rust-analyzer's xtask. Tasks:
 //! - `compare`: the structure shootout (see [`compare`]).
+//! - `render`: a Whitted-style picture through any structure, or per-pixel cost heatmaps (see
+//!   [`render`]).
 
 mod compare;
+mod render;
 mod structures;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
@@ -21,10 +24,15 @@ enum Task {
     /// Build every structure on one scene, trace the same rays through each, check every answer
     /// against brute force and the others, and print cost and speed.
     Compare(compare::Args),
+    /// Render a scene through one structure (Whitted-style: shadows, mirrors, glass) to a PNG,
+    /// or, with `--heatmap`, the primary rays' cost per pixel for several structures.
+    Render(render::Args),
 }
 
 fn main() -> ExitCode {
-    let command = Cli::command().mut_subcommand("compare", |c| c.after_help(compare::after_help()));
+    let command = Cli::command()
+        .mut_subcommand("compare", |c| c.after_help(compare::after_help()))
+        .mut_subcommand("render", |c| c.after_help(render::after_help()));
     let matches = command.get_matches();
     let cli = match Cli::from_arg_matches(&matches) {
         Ok(cli) => cli,
@@ -34,6 +42,13 @@ fn main() -> ExitCode {
         Task::Compare(args) => match compare::run(&args) {
             Ok(report) if report.total_mismatches() == 0 => ExitCode::SUCCESS,
             Ok(_) => ExitCode::from(1),
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        },
+        Task::Render(args) => match render::run(&args) {
+            Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("error: {e}");
                 ExitCode::from(2)

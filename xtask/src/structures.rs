@@ -6,11 +6,12 @@
 
 use rayon::prelude::*;
 use rt_bvh::Bvh;
-use rt_core::{Accel, BruteForce, BuildStats, Counters, Hit, Ray, Triangle};
+use rt_core::{Accel, BruteForce, BuildStats, Counters, Hit, Ray, Shape, Triangle};
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
 use rt_kdtree::KdTree;
 use rt_octree::Octree;
+use rt_render::Tracer;
 
 /// Which query a run makes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -95,47 +96,86 @@ impl<A: Accel<Prim = Triangle>> Traceable for Built<A> {
 /// Builds one row's structure over a scene.
 pub type Builder = Box<dyn Fn(&[Triangle]) -> Box<dyn Traceable> + Send + Sync>;
 
-/// One row `compare` can run: a structure type with one preset.
+/// Builds one row's structure over triangles and spheres, for `render`.
+pub type ShapeBuilder = Box<dyn Fn(&[Shape]) -> Box<dyn Tracer> + Send + Sync>;
+
+/// One row `compare` and `render` can run: a structure type with one preset.
 pub struct Entry {
     /// Row name: the crate name without `rt-` for the default preset, `name-preset` otherwise.
     pub name: String,
     pub build: Builder,
+    pub build_shapes: ShapeBuilder,
 }
 
-pub fn entries_of<A: Accel<Prim = Triangle> + 'static>() -> Vec<Entry> {
+/// Every preset of a structure type, `A` over triangles and `S` the same type over [`Shape`]s
+/// (the same presets apply to both).
+pub fn entries_of<A, S>() -> Vec<Entry>
+where
+    A: Accel<Prim = Triangle> + 'static,
+    S: Accel<Prim = Shape, Params = A::Params> + 'static,
+{
     A::presets()
         .into_iter()
         .enumerate()
-        .map(|(i, (preset, params))| Entry {
-            name: if i == 0 {
-                A::NAME.to_string()
-            } else {
-                format!("{}-{preset}", A::NAME)
-            },
-            build: Box::new(move |tris: &[Triangle]| {
-                Box::new(Built(A::build(tris, &params))) as Box<dyn Traceable>
-            }),
+        .map(|(i, (preset, params))| {
+            let for_shapes = params.clone();
+            Entry {
+                name: if i == 0 {
+                    A::NAME.to_string()
+                } else {
+                    format!("{}-{preset}", A::NAME)
+                },
+                build: Box::new(move |tris: &[Triangle]| {
+                    Box::new(Built(A::build(tris, &params))) as Box<dyn Traceable>
+                }),
+                build_shapes: Box::new(move |shapes: &[Shape]| {
+                    Box::new(S::build(shapes, &for_shapes)) as Box<dyn Tracer>
+                }),
+            }
         })
         .collect()
 }
 
 /// The default preset of one structure type.
 #[cfg(test)]
-pub fn entry_of<A: Accel<Prim = Triangle> + 'static>() -> Entry {
-    entries_of::<A>().remove(0)
+pub fn entry_of<A, S>() -> Entry
+where
+    A: Accel<Prim = Triangle> + 'static,
+    S: Accel<Prim = Shape, Params = A::Params> + 'static,
+{
+    entries_of::<A, S>().remove(0)
 }
 
 /// Every structure and preset, in report order.
 pub fn all() -> Vec<Entry> {
-    let mut all = entries_of::<Bvh<Triangle>>();
-    all.extend(entries_of::<KdTree<Triangle>>());
-    all.extend(entries_of::<Grid<Triangle>>());
-    all.extend(entries_of::<HGrid<Triangle>>());
-    all.extend(entries_of::<Octree<Triangle>>());
+    let mut all = entries_of::<Bvh<Triangle>, Bvh<Shape>>();
+    all.extend(entries_of::<KdTree<Triangle>, KdTree<Shape>>());
+    all.extend(entries_of::<Grid<Triangle>, Grid<Shape>>());
+    all.extend(entries_of::<HGrid<Triangle>, HGrid<Shape>>());
+    all.extend(entries_of::<Octree<Triangle>, Octree<Shape>>());
     all
 }
 
 /// The brute-force reference.
 pub fn brute_force() -> Entry {
-    entries_of::<BruteForce<Triangle>>().remove(0)
+    entries_of::<BruteForce<Triangle>, BruteForce<Shape>>().remove(0)
+}
+
+/// The entry called `name` (a row of [`all`], or `brute-force`), or an error listing the names.
+pub fn find(name: &str) -> Result<Entry, String> {
+    if name == "brute-force" {
+        return Ok(brute_force());
+    }
+    let mut entries = all();
+    match entries.iter().position(|e| e.name == name) {
+        Some(i) => Ok(entries.swap_remove(i)),
+        None => Err(format!(
+            "unknown structure `{name}` (known: {}, brute-force)",
+            entries
+                .iter()
+                .map(|e| e.name.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        )),
+    }
 }

@@ -1,5 +1,8 @@
 //! `cargo xtask compare` as a user runs it: the real binary, its exit status and its output.
 
+mod common;
+
+use common::assert_one_line_error;
 use rt_core::conformance::shared_meshes_dir;
 use std::process::{Command, Output};
 
@@ -19,18 +22,6 @@ fn json(out: &Output) -> serde_json::Value {
         String::from_utf8_lossy(&out.stderr)
     );
     serde_json::from_slice(&out.stdout).expect("stdout is one JSON object")
-}
-
-/// Bad input: exit status 2 and exactly one line on stderr, naming the problem.
-fn assert_one_line_error(out: &Output, needle: &str) {
-    assert_eq!(out.status.code(), Some(2));
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(err.lines().count(), 1, "stderr: {err}");
-    assert!(
-        err.starts_with("error: ") && err.contains(needle),
-        "stderr: {err}"
-    );
-    assert!(out.stdout.is_empty());
 }
 
 #[test]

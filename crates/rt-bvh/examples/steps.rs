@@ -126,9 +126,10 @@ fn main() {
             .fold(rt_core::Aabb::EMPTY, |b, t| b.union(t.bounds()));
         let camera = scenes::camera_for(spec, &bounds, width, height);
         for (ki, kind) in RayKind::ALL.into_iter().enumerate() {
-            let rays = raygen::rays_of_kind(kind, &camera, &bounds, (width, height), 1, |p| {
-                answers(&built[0], p, false)
-            });
+            let rays =
+                raygen::rays_of_kind(kind, tris, &camera, &bounds, (width, height), 1, |p| {
+                    answers(&built[0], p, false)
+                });
             let any = kind.is_any_hit();
             let expected = answers(&built[0], &rays, any);
             for (ci, b) in built.iter().enumerate() {

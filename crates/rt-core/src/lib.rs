@@ -43,8 +43,10 @@ mod ray;
 pub mod raygen;
 mod rng;
 pub mod scenes;
+mod shape;
 mod sphere;
 mod stats;
+mod surface;
 mod triangle;
 
 #[cfg(feature = "conformance")]
@@ -55,13 +57,15 @@ pub use accel::{Accel, BuildStats, Hit, ValidationError};
 pub use brute::BruteForce;
 pub use clip::{clip_triangle_bounds, split_triangle_bounds};
 pub use mailbox::Mailbox;
-pub use mesh::{IndexOutOfRange, Mesh};
+pub use mesh::{Mesh, MeshError, Shading};
 pub use obj::{LoadError, LoadErrorKind, load_obj, load_obj_bytes};
 pub use primitive::{PrimHit, Primitive, TriangleTest, valid_primitives};
 pub use ray::Ray;
 pub use rng::Rng;
+pub use shape::Shape;
 pub use sphere::Sphere;
 pub use stats::{Counters, NoStats, Stats};
+pub use surface::{OFFSET_ULPS, SurfacePoint, error_bound, offset_origin};
 pub use triangle::{MtTriangle, Shear, Triangle, moller_trumbore_edges};
 
 /// Re-exported so users name the same `Vec3` the library uses.

@@ -122,7 +122,7 @@ type ParseResult<T> = Result<T, (Option<usize>, LoadErrorKind)>;
 
 fn parse_obj(bytes: &[u8]) -> ParseResult<Mesh> {
     let text = decode(bytes)?;
-    validate(&text)?;
+    let corners_have = validate(&text)?;
     // tobj parses `l` (polyline) elements like faces, so a polyline of three or more points
     // would become a polygon. Lines are not surfaces: blank them (keeping line numbers).
     let text: String = text
@@ -161,6 +161,8 @@ fn parse_obj(bytes: &[u8]) -> ParseResult<Mesh> {
 
     let mut positions = Vec::new();
     let mut indices = Vec::new();
+    let (mut normals, mut normal_indices) = (Vec::new(), Vec::new());
+    let (mut uvs, mut uv_indices) = (Vec::new(), Vec::new());
     for model in &models {
         let m = &model.mesh;
         let base = positions.len() as u32;
@@ -169,7 +171,33 @@ fn parse_obj(bytes: &[u8]) -> ParseResult<Mesh> {
                 .chunks_exact(3)
                 .map(|p| Vec3::new(p[0], p[1], p[2])),
         );
-        let local = &positions[base as usize..];
+        // Normals and texture coordinates count only when every face corner of the file names
+        // one: where some corners do not, tobj fills in index 0 for them, which would shade
+        // those faces with an unrelated normal. Without, shading falls back to the geometric
+        // normal and the barycentrics.
+        let normal_base = normals.len() as u32;
+        let has_normals = corners_have.normals
+            && !m.normal_indices.is_empty()
+            && m.normal_indices.len() == m.indices.len();
+        if has_normals {
+            normals.extend(
+                m.normals
+                    .chunks_exact(3)
+                    .map(|n| Vec3::new(n[0], n[1], n[2])),
+            );
+        }
+        let uv_base = uvs.len() as u32;
+        let has_uvs = corners_have.uvs
+            && !m.texcoord_indices.is_empty()
+            && m.texcoord_indices.len() == m.indices.len();
+        if has_uvs {
+            uvs.extend(m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], t[1])));
+        }
+        let (local, local_normals, local_uvs) = (
+            &positions[base as usize..],
+            normals.len() - normal_base as usize,
+            uvs.len() - uv_base as usize,
+        );
         let arities: Vec<u32> = if m.face_arities.is_empty() {
             vec![3; m.indices.len() / 3]
         } else {
@@ -177,26 +205,53 @@ fn parse_obj(bytes: &[u8]) -> ParseResult<Mesh> {
         };
         let mut start = 0usize;
         for arity in arities {
-            let Some(face) = m.indices.get(start..start + arity as usize) else {
+            let range = start..start + arity as usize;
+            let Some(face) = m.indices.get(range.clone()) else {
                 return Err((
                     None,
                     LoadErrorKind::Parser("face list shorter than its arities".into()),
                 ));
             };
             start += arity as usize;
-            if face.iter().any(|&i| i as usize >= local.len()) {
+            let out_of = |ids: &[u32], len: usize| ids.iter().any(|&i| i as usize >= len);
+            if out_of(face, local.len())
+                || (has_normals && out_of(&m.normal_indices[range.clone()], local_normals))
+                || (has_uvs && out_of(&m.texcoord_indices[range.clone()], local_uvs))
+            {
                 return Err((
                     None,
                     LoadErrorKind::Parser("face index outside its object".into()),
                 ));
             }
-            triangulate(face, local, |t| indices.push(t.map(|i| i + base)));
+            let corners =
+                |list: &[u32], base: u32, c: [usize; 3]| c.map(|k| list[range.start + k] + base);
+            triangulate(face, local, |c| {
+                indices.push(corners(&m.indices, base, c));
+                normal_indices.push(if has_normals {
+                    corners(&m.normal_indices, normal_base, c)
+                } else {
+                    [Mesh::NONE; 3]
+                });
+                uv_indices.push(if has_uvs {
+                    corners(&m.texcoord_indices, uv_base, c)
+                } else {
+                    [Mesh::NONE; 3]
+                });
+            });
         }
     }
     if indices.is_empty() {
         return Err((None, LoadErrorKind::NoTriangles));
     }
-    Mesh::new(positions, indices).map_err(|e| (None, LoadErrorKind::Parser(e.to_string())))
+    let parser = |e: crate::MeshError| (None, LoadErrorKind::Parser(e.to_string()));
+    let mut mesh = Mesh::new(positions, indices).map_err(parser)?;
+    if !normals.is_empty() {
+        mesh = mesh.with_normals(normals, normal_indices).map_err(parser)?;
+    }
+    if !uvs.is_empty() {
+        mesh = mesh.with_uvs(uvs, uv_indices).map_err(parser)?;
+    }
+    Ok(mesh)
 }
 
 /// UTF-8 (with or without a byte-order mark), or UTF-16 of either byte order with a mark.
@@ -241,11 +296,22 @@ fn utf8(bytes: &[u8]) -> ParseResult<String> {
     })
 }
 
+/// Whether every face corner of a file names a texture coordinate, and a normal.
+#[derive(Clone, Copy, Debug)]
+struct Corners {
+    uvs: bool,
+    normals: bool,
+}
+
 /// The validation pass: finds, with its line number, everything the parser would reject or
 /// mishandle. Mirrors the OBJ rules `tobj` applies: `v` needs three numbers, `vt` two, `vn`
 /// three; face indices are 1-based or negative (relative to the elements defined so far).
-fn validate(text: &str) -> ParseResult<()> {
+fn validate(text: &str) -> ParseResult<Corners> {
     let mut counts = [0usize; 3]; // vertices, texture coordinates, normals
+    let mut corners_have = Corners {
+        uvs: true,
+        normals: true,
+    };
     for (n, line) in text.lines().enumerate() {
         let line_no = Some(n + 1);
         let err = |kind| Err((line_no, kind));
@@ -301,6 +367,8 @@ fn validate(text: &str) -> ParseResult<()> {
                 }
                 for corner in corners {
                     let parts: Vec<&str> = corner.split('/').collect();
+                    corners_have.uvs &= parts.get(1).is_some_and(|p| !p.is_empty());
+                    corners_have.normals &= parts.get(2).is_some_and(|p| !p.is_empty());
                     if parts.len() > 3 || parts[0].is_empty() {
                         return err(LoadErrorKind::Malformed(format!(
                             "bad face vertex `{corner}`"
@@ -335,20 +403,22 @@ fn validate(text: &str) -> ParseResult<()> {
             _ => {}
         }
     }
-    Ok(())
+    Ok(corners_have)
 }
 
-/// Splits one polygon into triangles by ear clipping in the plane of its Newell normal.
+/// Splits one polygon (its corners' position indices) into triangles by ear clipping in the
+/// plane of its Newell normal, emitting each triangle as three corner numbers (`0..face.len()`),
+/// so the caller can pick each corner's position, normal and texture coordinate.
 ///
 /// Degenerate polygons (no normal) and very large ones, where ear clipping's quadratic passes
 /// would cost too much, fall back to a fan. When no ear is found (self-intersecting input), a
 /// convex corner (or else the first one) is clipped anyway, so the loop always ends after
 /// `n - 2` triangles.
-fn triangulate(face: &[u32], pos: &[Vec3], mut emit: impl FnMut([u32; 3])) {
+fn triangulate(face: &[u32], pos: &[Vec3], mut emit: impl FnMut([usize; 3])) {
     const EAR_CLIPPING_LIMIT: usize = 256;
     let n = face.len();
     if n == 3 {
-        emit([face[0], face[1], face[2]]);
+        emit([0, 1, 2]);
         return;
     }
     let p = |i: u32| pos[i as usize];
@@ -363,7 +433,7 @@ fn triangulate(face: &[u32], pos: &[Vec3], mut emit: impl FnMut([u32; 3])) {
     }
     if normal == Vec3::ZERO || !normal.is_finite() || n > EAR_CLIPPING_LIMIT {
         for k in 1..n - 1 {
-            emit([face[0], face[k], face[k + 1]]);
+            emit([0, k, k + 1]);
         }
         return;
     }
@@ -412,14 +482,10 @@ fn triangulate(face: &[u32], pos: &[Vec3], mut emit: impl FnMut([u32; 3])) {
             .find(|&k| is_ear(k))
             .or_else(|| (0..m).find(|&k| convex(k)))
             .unwrap_or(0);
-        emit([
-            face[ring[(k + m - 1) % m]],
-            face[ring[k]],
-            face[ring[(k + 1) % m]],
-        ]);
+        emit([ring[(k + m - 1) % m], ring[k], ring[(k + 1) % m]]);
         ring.remove(k);
     }
-    emit([face[ring[0]], face[ring[1]], face[ring[2]]]);
+    emit([ring[0], ring[1], ring[2]]);
 }
 
 #[cfg(test)]
@@ -443,6 +509,39 @@ mod tests {
         let m =
             load("v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nvn 0 0 1\nf -3/1/1 -2//1 -1/-1/-1\n").unwrap();
         assert_eq!(m.triangle(0), Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y));
+    }
+
+    #[test]
+    fn keeps_normals_and_texture_coordinates() {
+        // A quad with its own normal and texture-coordinate numbering, in two objects.
+        let text = "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\n\
+                    vt 0 0\nvt 1 0\nvt 1 1\nvt 0 1\nvn 0 0 2\nvn 0 1 0\n\
+                    f 1/1/1 2/2/1 3/3/2 4/4/2\no other\nv 5 0 0\nv 6 0 0\nv 5 1 0\n\
+                    f 5/1/1 6/2/1 7/4/1\n";
+        let m = load(text).unwrap();
+        assert_eq!(m.triangle_count(), 3);
+        assert_eq!(m.uvs().len(), 4 + 3);
+        assert_eq!(m.shading(2, 0.5, 0.25).normal, Vec3::Z);
+        assert_eq!(m.shading(2, 0.0, 1.0).uv, Vec2::new(0.0, 1.0));
+        // One face without normals or texture coordinates: the file has none (tobj would give
+        // that face an unrelated one), and shading uses the geometric normal.
+        let m = load(&format!("{text}f 5 6 7\n")).unwrap();
+        assert!(m.normal_indices().is_none() && m.uv_indices().is_none());
+        assert_eq!(m.shading(0, 0.25, 0.25).normal, Vec3::Z);
+        let m = load(text).unwrap();
+        for i in 0..2 {
+            // Texture coordinates follow the positions here, so they interpolate to the point.
+            let s = m.shading(i, 0.25, 0.25);
+            assert!(s.uv.distance(s.surface.point.truncate()) < 1e-6, "{s:?}");
+            assert!(s.normal.is_normalized());
+        }
+        // At the corner where vertex 3 (normal 2, +y) sits, the shading normal is +y.
+        let corner = (0..2)
+            .flat_map(|i| [(i, 1.0, 0.0), (i, 0.0, 1.0), (i, 0.0, 0.0)])
+            .map(|(i, u, v)| m.shading(i, u, v))
+            .find(|s| s.surface.point == Vec3::new(1.0, 1.0, 0.0))
+            .unwrap();
+        assert_eq!(corner.normal, Vec3::Y);
     }
 
     #[test]

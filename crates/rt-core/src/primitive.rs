@@ -1,6 +1,6 @@
 //! The small trait that makes structures generic over what they store.
 
-use crate::{Aabb, Ray};
+use crate::{Aabb, Ray, SurfacePoint};
 use glam::Vec3;
 use std::fmt::Debug;
 
@@ -99,6 +99,27 @@ pub trait Primitive: Clone + Send + Sync + Debug + 'static {
     #[inline]
     fn occludes(&self, ray: &Ray, t_max: f32) -> bool {
         self.intersect(ray, t_max).is_some()
+    }
+
+    /// The surface at a hit this primitive reported for `ray` (`t`, `u`, `v` as in its
+    /// [`PrimHit`]): the point, the geometric normal and an error bound, from which
+    /// [`SurfacePoint::spawn_ray`] starts shadow, reflection and refraction rays that cannot
+    /// hit this surface again at their origin.
+    ///
+    /// The default knows nothing of the shape: it takes `ray.at(t)`, a normal facing back along
+    /// the ray, and an error bound of [`OFFSET_ULPS`](crate::OFFSET_ULPS) relative units of the
+    /// coordinates involved, doubled for the unknown error of `t`. That is right for rays
+    /// leaving towards the side the ray came from, which is all a shadow ray towards a light in
+    /// front of the surface needs; primitives that can be refracted through or lit from behind
+    /// should override it, as [`Triangle`](crate::Triangle) and [`Sphere`](crate::Sphere) do.
+    fn surface(&self, ray: &Ray, t: f32, _u: f32, _v: f32) -> SurfacePoint {
+        let point = ray.at(t);
+        let magnitude = point.abs().max_element() + ray.origin.abs().max_element();
+        SurfacePoint {
+            point,
+            normal: -ray.dir.normalize_or(Vec3::Z),
+            error: 2.0 * crate::surface::error_bound(magnitude),
+        }
     }
 }
 

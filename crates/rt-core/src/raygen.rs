@@ -1,7 +1,7 @@
 //! Ray sets for measuring structures: primary (camera), incoherent and shadow rays, and the
 //! rays-file format used to replay them.
 
-use crate::{Aabb, Hit, Ray, Rng};
+use crate::{Aabb, Hit, Primitive, Ray, Rng};
 use glam::Vec3;
 use std::fmt;
 use std::path::Path;
@@ -68,26 +68,75 @@ impl Camera {
         }
     }
 
-    /// One ray through the centre of each pixel of a `width × height` image, row by row from the
-    /// top left.
-    pub fn primary_rays(&self, width: u32, height: u32) -> Vec<Ray> {
+    /// The camera set up for a `width × height` image: it gives the ray through any point of the
+    /// image plane ([`Raster::ray`]), for renderers that sample pixels one at a time, several
+    /// times, or in tiles.
+    pub fn raster(&self, width: u32, height: u32) -> Raster {
         let forward = (self.target - self.eye).normalize();
         let right = forward.cross(self.up).normalize();
         let up = right.cross(forward);
         let tan = (0.5 * self.vfov_deg.to_radians()).tan();
-        let aspect = width as f32 / height.max(1) as f32;
+        Raster {
+            eye: self.eye,
+            forward,
+            right,
+            up,
+            tan,
+            aspect: width as f32 / height.max(1) as f32,
+            width: width as f32,
+            height: height as f32,
+        }
+    }
+
+    /// One ray through the centre of each pixel of a `width × height` image, row by row from the
+    /// top left.
+    pub fn primary_rays(&self, width: u32, height: u32) -> Vec<Ray> {
+        let raster = self.raster(width, height);
         let mut rays = Vec::with_capacity(width as usize * height as usize);
         for y in 0..height {
             for x in 0..width {
-                let sx = (2.0 * (x as f32 + 0.5) / width as f32 - 1.0) * tan * aspect;
-                let sy = (1.0 - 2.0 * (y as f32 + 0.5) / height as f32) * tan;
-                rays.push(Ray::new(
-                    self.eye,
-                    (forward + sx * right + sy * up).normalize(),
-                ));
+                rays.push(raster.ray(x as f32 + 0.5, y as f32 + 0.5));
             }
         }
         rays
+    }
+}
+
+/// A [`Camera`] set up for one image size (see [`Camera::raster`]).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Raster {
+    eye: Vec3,
+    forward: Vec3,
+    right: Vec3,
+    up: Vec3,
+    tan: f32,
+    aspect: f32,
+    width: f32,
+    height: f32,
+}
+
+impl Raster {
+    /// The ray through the point `(x, y)` of the image, in pixels from its top left corner: the
+    /// centre of pixel `(i, j)` is `(i + 0.5, j + 0.5)`, and any other point of the pixel gives
+    /// a sub-pixel sample. The direction is unit length; the interval is `[0, inf]`.
+    ///
+    /// ```
+    /// use rt_core::{Aabb, raygen::Camera, glam::Vec3};
+    /// let camera = Camera::framing(&Aabb::new(Vec3::ZERO, Vec3::ONE), 64, 48);
+    /// let raster = camera.raster(64, 48);
+    /// assert_eq!(raster.ray(3.5, 7.5), camera.primary_rays(64, 48)[7 * 64 + 3]);
+    /// // The top left corner of the image looks up and to the left of its centre.
+    /// let (corner, centre) = (raster.ray(0.0, 0.0), raster.ray(32.0, 24.0));
+    /// assert!(corner.dir.y > centre.dir.y);
+    /// ```
+    #[inline]
+    pub fn ray(&self, x: f32, y: f32) -> Ray {
+        let sx = (2.0 * x / self.width - 1.0) * self.tan * self.aspect;
+        let sy = (1.0 - 2.0 * y / self.height) * self.tan;
+        Ray::new(
+            self.eye,
+            (self.forward + sx * self.right + sy * self.up).normalize(),
+        )
     }
 }
 
@@ -105,16 +154,25 @@ pub fn default_light(bounds: &Aabb) -> Vec3 {
     bounds.center() + Vec3::new(0.6, 1.0, 0.4).normalize() * bounds.extent().length()
 }
 
-/// Occlusion rays from each primary hit to `light`: origin at the hit point, direction towards
-/// the light, `t` in `[1e-4, 1 - 1e-4]` of the way there (the margins keep the surface that was
-/// hit and the light itself out of the test).
-pub fn shadow_rays(primary: &[Ray], hits: &[Option<Hit>], light: Vec3) -> Vec<Ray> {
+/// Occlusion rays from each primary hit to `light`, over `t` in `[0, 1]` of the way there, each
+/// started at the hit's surface point moved off the surface by its error bound
+/// ([`SurfacePoint::spawn_ray_to`](crate::SurfacePoint::spawn_ray_to)), so that no ray can hit
+/// the surface it starts on. `prims` are the primitives the hits index.
+pub fn shadow_rays<P: Primitive>(
+    primary: &[Ray],
+    hits: &[Option<Hit>],
+    prims: &[P],
+    light: Vec3,
+) -> Vec<Ray> {
     primary
         .iter()
         .zip(hits)
-        .filter_map(|(r, h)| h.map(|h| r.at(h.t)))
-        .filter(|&p| p != light)
-        .map(|p| Ray::with_interval(p, light - p, 1e-4, 1.0 - 1e-4))
+        .filter_map(|(r, h)| {
+            let h = (*h)?;
+            let surface = prims.get(h.prim as usize)?.surface(r, h.t, h.u, h.v);
+            Some(surface.spawn_ray_to(light))
+        })
+        .filter(|r| r.is_valid())
         .collect()
 }
 
@@ -150,11 +208,12 @@ impl RayKind {
 
 /// The rays of one kind, exactly as `cargo xtask compare` and the benchmarks trace them:
 /// `width × height` primary rays of `camera`; as many incoherent rays in `bounds` drawn with
-/// `seed`; or one shadow ray per primary hit towards [`default_light`]. Shadow rays need the
-/// primary rays' closest hits, which `closest_hits` computes (with any correct structure: they
-/// all give the same answers).
-pub fn rays_of_kind(
+/// `seed`; or one shadow ray per primary hit towards [`default_light`] ([`shadow_rays`]). Shadow
+/// rays need the primary rays' closest hits on `prims`, which `closest_hits` computes (with any
+/// correct structure: they all give the same answers).
+pub fn rays_of_kind<P: Primitive>(
     kind: RayKind,
+    prims: &[P],
     camera: &Camera,
     bounds: &Aabb,
     (width, height): (u32, u32),
@@ -167,7 +226,7 @@ pub fn rays_of_kind(
         RayKind::Shadow => {
             let primary = camera.primary_rays(width, height);
             let hits = closest_hits(&primary);
-            shadow_rays(&primary, &hits, default_light(bounds))
+            shadow_rays(&primary, &hits, prims, default_light(bounds))
         }
     }
 }

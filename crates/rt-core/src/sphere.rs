@@ -1,6 +1,6 @@
 //! Spheres as an implicit surface.
 
-use crate::{Aabb, PrimHit, Primitive, Ray};
+use crate::{Aabb, PrimHit, Primitive, Ray, SurfacePoint};
 use glam::Vec3;
 
 /// A sphere `|p - center| = radius`.
@@ -90,6 +90,18 @@ impl Primitive for Sphere {
         match self.roots(ray) {
             Some((t0, t1)) => (t0 >= ray.t_min && t0 <= t_max) || (t1 >= ray.t_min && t1 <= t_max),
             None => false,
+        }
+    }
+
+    /// The point `ray.at(t)` projected back onto the sphere, the outward normal, and an error
+    /// bound relative to the centre's largest coordinate plus the radius.
+    #[inline]
+    fn surface(&self, ray: &Ray, t: f32, _u: f32, _v: f32) -> SurfacePoint {
+        let normal = (ray.at(t) - self.center).normalize_or(Vec3::Y);
+        SurfacePoint {
+            point: self.center + self.radius * normal,
+            normal,
+            error: crate::surface::error_bound(self.center.abs().max_element() + self.radius),
         }
     }
 }

@@ -1,6 +1,6 @@
 //! Triangles, with the Möller–Trumbore and the watertight ray–triangle tests.
 
-use crate::{Aabb, PrimHit, Primitive, Ray, TriangleTest};
+use crate::{Aabb, PrimHit, Primitive, Ray, SurfacePoint, TriangleTest};
 use glam::{DVec3, Vec3};
 
 /// A triangle given by its three vertices.
@@ -251,6 +251,32 @@ impl Primitive for Triangle {
     fn as_triangle(&self) -> Option<(Triangle, TriangleTest)> {
         Some((*self, TriangleTest::Watertight))
     }
+
+    /// The point interpolated from the vertices with the barycentrics `u`, `v` (not
+    /// `ray.at(t)`, whose error grows with the distance travelled), the unit normal of the
+    /// winding, and an error bound relative to the largest vertex coordinate.
+    #[inline]
+    fn surface(&self, _ray: &Ray, _t: f32, u: f32, v: f32) -> SurfacePoint {
+        self.surface_at(u, v)
+    }
+}
+
+impl Triangle {
+    /// The [`SurfacePoint`] at barycentrics `u` (weight of `v1`) and `v` (weight of `v2`).
+    #[inline]
+    pub fn surface_at(&self, u: f32, v: f32) -> SurfacePoint {
+        let magnitude = self
+            .v0
+            .abs()
+            .max(self.v1.abs())
+            .max(self.v2.abs())
+            .max_element();
+        SurfacePoint {
+            point: (1.0 - u - v) * self.v0 + u * self.v1 + v * self.v2,
+            normal: self.normal().normalize_or(Vec3::Z),
+            error: crate::surface::error_bound(magnitude),
+        }
+    }
 }
 
 /// A [`Triangle`] intersected with Möller–Trumbore instead of the watertight test.
@@ -287,6 +313,10 @@ impl Primitive for MtTriangle {
     #[inline]
     fn as_triangle(&self) -> Option<(Triangle, TriangleTest)> {
         Some((self.0, TriangleTest::MollerTrumbore))
+    }
+    #[inline]
+    fn surface(&self, _ray: &Ray, _t: f32, u: f32, v: f32) -> SurfacePoint {
+        self.0.surface_at(u, v)
     }
 }
 

@@ -1,0 +1,46 @@
+//! A small Whitted-style ray tracer over any rt-accel structure: the picture that shows a
+//! structure answers right, and the per-pixel cost heatmaps that show where its work goes.
+//!
+//! - [`RenderScene`]: a triangle [`Mesh`](rt_core::Mesh) (with its normals and texture
+//!   coordinates) plus analytic spheres, [`Material`]s, [`PointLight`]s, a camera and a sky;
+//!   [`RenderScene::whitted`] is the built-in scene of a glass sphere, a mirror sphere, a
+//!   checkerboard floor and the procedural teapot, and [`scene`] also loads the built-in mesh
+//!   scenes and OBJ files.
+//! - [`render`]: primary rays through every pixel, shadow rays to each light through the
+//!   any-hit query, mirror and refracted rays to a fixed depth (see `whitted.rs`), tiles in
+//!   parallel on rayon's pool. Secondary rays start at the hit moved off its surface by an
+//!   error bound ([`rt_core::SurfacePoint::spawn_ray`]), never by a per-scene epsilon.
+//! - [`cost_map`] and [`heatmap_strip`]: the primary rays' node visits or primitive tests per
+//!   pixel, several structures side by side on one colour scale with a legend.
+//! - [`Tracer`]: the renderer's object-safe view of a structure, implemented by every
+//!   [`Accel`](rt_core::Accel) over [`Shape`](rt_core::Shape)s.
+//!
+//! Every correct structure renders the same bytes: the renderer re-derives each hit from the
+//! primitive the structure names, and the tie rule makes that primitive unique.
+//!
+//! ```
+//! use rt_core::Accel;
+//! use rt_render::{RenderOptions, RenderScene, render};
+//!
+//! let scene = RenderScene::whitted();
+//! let shapes = scene.shapes();
+//! let accel = rt_core::BruteForce::build(&shapes, &Default::default());
+//! let options = RenderOptions { width: 4, height: 3, depth: 3 };
+//! let image = render(&scene, &shapes, &accel, &options, &|_done, _total| {}).unwrap();
+//! assert_eq!((image.width, image.height), (4, 3));
+//! // image.save_png(std::path::Path::new("whitted.png")) writes it.
+//! ```
+#![warn(missing_docs)]
+
+mod heatmap;
+mod image;
+mod scene;
+mod tracer;
+mod whitted;
+
+pub use heatmap::{
+    CostMap, Metric, Scale, cost_map, draw_text, heatmap_strip, text_width, viridis,
+};
+pub use image::{Image, ImageError, MAX_SIDE, RenderOptions, TILE, encode, render};
+pub use scene::{Material, PointLight, RenderScene, builtin_names, scene};
+pub use tracer::Tracer;

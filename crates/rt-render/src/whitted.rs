@@ -1,0 +1,160 @@
+//! Whitted-style recursive ray tracing (Whitted, "An Improved Illumination Model for Shaded
+//! Display", 1980): at each hit, a Lambert term and a Phong highlight for every light that a
+//! shadow ray sees, then a mirror ray and a refracted ray (Snell's law, Schlick's Fresnel
+//! weights, total internal reflection) where the material asks, to a fixed depth.
+
+use crate::{RenderScene, Tracer};
+use rt_core::{Hit, Primitive, Ray, Shape, SurfacePoint, glam::Vec3};
+
+/// Everything one pixel's rays need, borrowed once per render.
+pub(crate) struct Context<'a> {
+    pub scene: &'a RenderScene,
+    pub shapes: &'a [Shape],
+    pub tracer: &'a dyn Tracer,
+    pub max_depth: u32,
+}
+
+/// What the renderer knows of a hit after re-deriving it from the primitive itself.
+struct Surface {
+    /// Point, geometric normal and error bound (for spawning rays).
+    at: SurfacePoint,
+    /// Unit shading normal, on the same side as `at.normal`.
+    normal: Vec3,
+}
+
+impl Context<'_> {
+    /// The colour (linear RGB) seen along `ray`, which has `depth` bounces behind it.
+    pub fn radiance(&self, ray: &Ray, depth: u32) -> Vec3 {
+        match self.tracer.closest_hit(ray) {
+            Some(hit) => self.shade(ray, hit, depth),
+            None => self.sky(ray.dir),
+        }
+    }
+
+    fn sky(&self, dir: Vec3) -> Vec3 {
+        let (horizon, zenith) = self.scene.sky;
+        let up = dir.normalize_or_zero().y.max(0.0);
+        horizon.lerp(zenith, up.sqrt())
+    }
+
+    /// The surface the structure reported. The hit's `t`, `u`, `v` are recomputed by the
+    /// primitive's own test on the same ray: structures must agree on the primitive exactly
+    /// but on `t` only within a tolerance, and re-deriving it makes the picture depend on the
+    /// primitive alone, so every correct structure renders the same bytes.
+    fn surface(&self, ray: &Ray, hit: Hit) -> Surface {
+        let prim = hit.prim as usize;
+        let shape = &self.shapes[prim];
+        let (t, u, v) = match shape.intersect(ray, ray.t_max) {
+            Some(h) => (h.t, h.u, h.v),
+            None => (hit.t, hit.u, hit.v),
+        };
+        match shape {
+            Shape::Triangle(_) if prim < self.scene.mesh.triangle_count() => {
+                let s = self.scene.mesh.shading(prim, u, v);
+                Surface {
+                    at: s.surface,
+                    normal: s.normal,
+                }
+            }
+            _ => {
+                let at = shape.surface(ray, t, u, v);
+                Surface {
+                    at,
+                    normal: at.normal,
+                }
+            }
+        }
+    }
+
+    fn shade(&self, ray: &Ray, hit: Hit, depth: u32) -> Vec3 {
+        let material = self.scene.material(hit.prim as usize);
+        let Surface { at, mut normal } = self.surface(ray, hit);
+        let d = ray.dir.normalize();
+        // Face the viewer: flip both normals when the ray arrives from the back (or from inside
+        // a glass sphere); `entering` says which side of a refracting surface we are on.
+        let entering = d.dot(at.normal) < 0.0;
+        let geometric = if entering { at.normal } else { -at.normal };
+        if normal.dot(geometric) < 0.0 {
+            normal = -normal;
+        }
+        // An interpolated normal can face away from the viewer near silhouettes; the geometric
+        // one cannot.
+        if normal.dot(d) >= 0.0 {
+            normal = geometric;
+        }
+
+        let albedo = match material.checker {
+            Some(other) => {
+                let s = material.checker_size;
+                let (i, k) = (
+                    (at.point.x / s).floor() as i64,
+                    (at.point.z / s).floor() as i64,
+                );
+                if (i + k).rem_euclid(2) == 0 {
+                    material.color
+                } else {
+                    other
+                }
+            }
+            None => material.color,
+        };
+        let opaque = 1.0 - material.transmission;
+        let mut color = self.scene.ambient * albedo * material.diffuse * opaque;
+        for light in &self.scene.lights {
+            let to_light = light.position - at.point;
+            let l = to_light.normalize_or_zero();
+            let lambert = normal.dot(l);
+            // Lights behind the surface (as the geometry faces) cannot reach it.
+            if lambert <= 0.0 || geometric.dot(l) <= 0.0 {
+                continue;
+            }
+            if self.tracer.any_hit(&at.spawn_ray_to(light.position)) {
+                continue;
+            }
+            let diffuse = albedo * (material.diffuse * opaque * lambert);
+            let half = (l - d).normalize_or_zero();
+            let highlight = material.specular * normal.dot(half).max(0.0).powf(material.shininess);
+            color += light.intensity * (diffuse + Vec3::splat(highlight));
+        }
+        if depth + 1 >= self.max_depth {
+            return color;
+        }
+        let reflect = |n: Vec3| d - 2.0 * d.dot(n) * n;
+        // A reflected direction must leave on the viewer's side of the geometry; the shading
+        // normal can bend it below, where the geometric normal cannot.
+        let mut r = reflect(normal);
+        if r.dot(geometric) <= 0.0 {
+            r = reflect(geometric);
+        }
+        if material.mirror > 0.0 {
+            color += material.mirror
+                * opaque
+                * material.color
+                * self.radiance(&at.spawn_ray(r), depth + 1);
+        }
+        if material.transmission > 0.0 {
+            let eta = if entering {
+                1.0 / material.ior
+            } else {
+                material.ior
+            };
+            let cos_i = -d.dot(normal);
+            let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+            let reflected = self.radiance(&at.spawn_ray(r), depth + 1);
+            let light = if sin2_t >= 1.0 {
+                // Total internal reflection.
+                reflected
+            } else {
+                let cos_t = (1.0 - sin2_t).sqrt();
+                let t = (eta * d + (eta * cos_i - cos_t) * normal).normalize();
+                // Schlick's approximation, with the cosine on the optically thinner side.
+                let r0 = ((1.0 - material.ior) / (1.0 + material.ior)).powi(2);
+                let c = if entering { cos_i } else { cos_t };
+                let fresnel = r0 + (1.0 - r0) * (1.0 - c).powi(5);
+                fresnel * reflected + (1.0 - fresnel) * self.radiance(&at.spawn_ray(t), depth + 1)
+            };
+            color += material.transmission * material.color * light;
+        }
+        color
+    }
+}

@@ -1,0 +1,254 @@
+//! `cargo xtask render`: a Whitted-style picture of a scene through one structure, or per-pixel
+//! cost heatmaps of several side by side. The renderer is the `rt-render` library; this module
+//! only reads flags, picks the scene and structures, shows progress and writes the PNG.
+
+use crate::structures;
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rt_render::{Metric, RenderOptions, RenderScene};
+use std::fmt::Write as _;
+use std::io::IsTerminal;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Flags of `cargo xtask render`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// `whitted` (glass and mirror spheres, a checkerboard floor and a teapot), a built-in mesh
+    /// scene of `compare`, or an OBJ file.
+    #[arg(long, default_value = "whitted")]
+    pub scene: String,
+    /// The structure row to trace with (as `compare` names them, or `brute-force`).
+    #[arg(long, default_value = "bvh")]
+    pub structure: String,
+    /// Image width in pixels (per panel for heatmaps).
+    #[arg(long, default_value_t = 1024)]
+    pub width: u32,
+    /// Image height in pixels.
+    #[arg(long, default_value_t = 768)]
+    pub height: u32,
+    /// Rays along a path, the primary ray included (1: no reflection or refraction).
+    #[arg(long, default_value_t = 5)]
+    pub depth: u32,
+    /// Worker threads (default: all cores).
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// The PNG to write.
+    #[arg(long, default_value = "render.png")]
+    pub out: PathBuf,
+    /// Instead of a picture, the primary rays' cost per pixel: `visits` (nodes or cells
+    /// entered) or `tests` (primitive tests), one panel per structure on one colour scale.
+    #[arg(long, value_name = "visits|tests")]
+    pub heatmap: Option<String>,
+    /// Structures for `--heatmap`, comma-separated.
+    #[arg(
+        long,
+        value_delimiter = ',',
+        default_value = "bvh,kdtree,grid,hgrid,octree"
+    )]
+    pub structures: Vec<String>,
+}
+
+/// The text after `--help`: scenes and structures.
+pub fn after_help() -> String {
+    let mut s = String::from("Scenes: ");
+    s.push_str(&rt_render::builtin_names().join(", "));
+    s.push_str(", or an OBJ file\nStructures: ");
+    let names: Vec<String> = structures::all().into_iter().map(|e| e.name).collect();
+    s.push_str(&names.join(", "));
+    s.push_str(", brute-force\n\nExit status: 0 when the PNG is written, 2 on bad input.");
+    s
+}
+
+/// Runs the task; the error is one line for `error: ...`.
+pub fn run(args: &Args) -> Result<(), String> {
+    let threads = args
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    if threads == 0 {
+        return Err("--threads must be at least 1".into());
+    }
+    if args.depth == 0 || args.depth > 64 {
+        return Err(format!(
+            "--depth {} is not usable: 1 to 64 rays per path",
+            args.depth
+        ));
+    }
+    // Checked before any work, so a bad size fails at once, not after loading a mesh.
+    rt_render::Image::new(args.width, args.height).map_err(|e| e.to_string())?;
+    check_output(&args.out)?;
+    let scene = load(&args.scene, args.width, args.height)?;
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| format!("cannot start {threads} threads: {e}"))?;
+    pool.install(|| match &args.heatmap {
+        None => picture(args, &scene, threads),
+        Some(metric) => heatmaps(args, &scene, metric),
+    })
+}
+
+fn load(spec: &str, width: u32, height: u32) -> Result<RenderScene, String> {
+    let names = rt_render::builtin_names();
+    if !names.contains(&spec) && !Path::new(spec).exists() && !spec.contains(['/', '\\', '.']) {
+        return Err(format!(
+            "no built-in scene or file named `{spec}` (built-in scenes: {})",
+            names.join(", ")
+        ));
+    }
+    rt_render::scene(spec, width, height).map_err(|e| e.to_string())
+}
+
+/// Fails early, with the path, if the PNG cannot be written where asked.
+fn check_output(out: &Path) -> Result<(), String> {
+    let dir = match out.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d,
+        _ => Path::new("."),
+    };
+    if !dir.is_dir() {
+        return Err(format!(
+            "{}: cannot write PNG: directory {} does not exist",
+            out.display(),
+            dir.display()
+        ));
+    }
+    if out.is_dir() {
+        return Err(format!(
+            "{}: cannot write PNG: it is a directory",
+            out.display()
+        ));
+    }
+    Ok(())
+}
+
+fn progress_bar(label: &str) -> ProgressBar {
+    let bar = ProgressBar::with_draw_target(
+        None,
+        if std::io::stderr().is_terminal() {
+            ProgressDrawTarget::stderr()
+        } else {
+            ProgressDrawTarget::hidden()
+        },
+    );
+    if let Ok(style) = ProgressStyle::with_template("{msg} {bar:30} {pos}/{len} tiles ({elapsed})")
+    {
+        bar.set_style(style);
+    }
+    bar.set_message(label.to_string());
+    bar
+}
+
+fn picture(args: &Args, scene: &RenderScene, threads: usize) -> Result<(), String> {
+    let entry = structures::find(&args.structure)?;
+    let shapes = scene.shapes();
+    let start = Instant::now();
+    let tracer = (entry.build_shapes)(&shapes);
+    let build = start.elapsed();
+    let options = RenderOptions {
+        width: args.width,
+        height: args.height,
+        depth: args.depth,
+    };
+    let bar = progress_bar(&format!("render {}", entry.name));
+    let start = Instant::now();
+    let image = rt_render::render(scene, &shapes, tracer.as_ref(), &options, &|done, total| {
+        bar.set_length(total as u64);
+        bar.set_position(done as u64);
+    })
+    .map_err(|e| e.to_string())?;
+    let elapsed = start.elapsed();
+    bar.finish_and_clear();
+    image.save_png(&args.out).map_err(|e| e.to_string())?;
+    println!(
+        "wrote {}: {} {}×{}, depth {}, {} primitives; {} built in {:.0} ms, rendered in {:.2} s on {} threads",
+        args.out.display(),
+        args.scene,
+        args.width,
+        args.height,
+        args.depth,
+        shapes.len(),
+        entry.name,
+        build.as_secs_f64() * 1e3,
+        elapsed.as_secs_f64(),
+        threads
+    );
+    Ok(())
+}
+
+fn heatmaps(args: &Args, scene: &RenderScene, metric: &str) -> Result<(), String> {
+    let metric = Metric::parse(metric)?;
+    let entries = args
+        .structures
+        .iter()
+        .map(|n| structures::find(n))
+        .collect::<Result<Vec<_>, _>>()?;
+    if entries.is_empty() {
+        return Err("--structures names no structure".into());
+    }
+    let shapes = scene.shapes();
+    let mut panels = Vec::new();
+    for entry in &entries {
+        let tracer = (entry.build_shapes)(&shapes);
+        let bar = progress_bar(&format!("{} {}", metric.name(), entry.name));
+        let costs = rt_render::cost_map(
+            scene,
+            tracer.as_ref(),
+            args.width,
+            args.height,
+            metric,
+            &|done, total| {
+                bar.set_length(total as u64);
+                bar.set_position(done as u64);
+            },
+        )
+        .map_err(|e| e.to_string())?;
+        bar.finish_and_clear();
+        panels.push((entry.name.clone(), costs));
+    }
+    let strip = rt_render::heatmap_strip(&panels, metric);
+    strip.save_png(&args.out).map_err(|e| e.to_string())?;
+    let mut line = format!(
+        "wrote {}: {} per primary ray on {}, {}×{} per panel; mean",
+        args.out.display(),
+        metric.name(),
+        args.scene,
+        args.width,
+        args.height
+    );
+    for (name, c) in &panels {
+        let _ = write!(line, " {name} {:.1}", c.mean());
+    }
+    println!("{line}");
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every row `compare` knows, every preset included, renders the Whitted scene to the same
+    /// bytes as the first row.
+    #[test]
+    fn every_row_renders_the_same_bytes() {
+        let scene = RenderScene::whitted();
+        let shapes = scene.shapes();
+        let options = RenderOptions {
+            width: 64,
+            height: 48,
+            depth: 5,
+        };
+        let mut reference: Option<(String, rt_render::Image)> = None;
+        for entry in structures::all() {
+            let tracer = (entry.build_shapes)(&shapes);
+            let image =
+                rt_render::render(&scene, &shapes, tracer.as_ref(), &options, &|_, _| {}).unwrap();
+            match &reference {
+                None => reference = Some((entry.name, image)),
+                Some((first, expected)) => assert!(
+                    image == *expected,
+                    "{} renders differently from {first}",
+                    entry.name
+                ),
+            }
+        }
+    }
+}

@@ -1,0 +1,16 @@
+//! Helpers shared by the CLI tests.
+
+use std::process::Output;
+
+/// Bad input: exit status 2, exactly one line on stderr that starts with `error: ` and contains
+/// `needle`, and nothing on stdout.
+pub fn assert_one_line_error(out: &Output, needle: &str) {
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(err.lines().count(), 1, "stderr: {err}");
+    assert!(
+        err.starts_with("error: ") && err.contains(needle),
+        "stderr: {err}"
+    );
+    assert!(out.stdout.is_empty());
+}

@@ -1,0 +1,163 @@
+//! `cargo xtask render` as a user runs it: the real binary, its exit status, its output and the
+//! PNG it writes.
+
+mod common;
+
+use common::assert_one_line_error;
+use rt_core::conformance::shared_meshes_dir;
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn render(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .arg("render")
+        .args(args)
+        .output()
+        .expect("xtask runs")
+}
+
+/// A fresh directory for one test's output.
+fn scratch(test: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("rt-accel-render-{test}-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+/// Width and height from a PNG's header, after checking the signature.
+fn png_size(path: &Path) -> (u32, u32) {
+    let bytes = std::fs::read(path).unwrap();
+    assert_eq!(
+        &bytes[..8],
+        b"\x89PNG\r\n\x1a\n",
+        "{} is not a PNG",
+        path.display()
+    );
+    assert_eq!(&bytes[12..16], b"IHDR");
+    let be = |i: usize| u32::from_be_bytes(bytes[i..i + 4].try_into().unwrap());
+    (be(16), be(20))
+}
+
+#[test]
+fn renders_a_png_of_the_requested_size() {
+    let dir = scratch("ok");
+    let out = dir.join("w.png");
+    let o = render(&[
+        "--width",
+        "48",
+        "--height",
+        "32",
+        "--depth",
+        "3",
+        "--structure",
+        "kdtree",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{o:?}");
+    assert_eq!(png_size(&out), (48, 32));
+    let line = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        line.starts_with("wrote ") && line.contains("kdtree"),
+        "{line}"
+    );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn heatmap_strip_has_one_panel_per_structure() {
+    let dir = scratch("heat");
+    let out = dir.join("h.png");
+    let o = render(&[
+        "--scene",
+        "teapot-in-stadium",
+        "--heatmap",
+        "tests",
+        "--structures",
+        "bvh,grid",
+        "--width",
+        "40",
+        "--height",
+        "30",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{o:?}");
+    let (w, _) = png_size(&out);
+    // Two panels and three gaps of 8 pixels.
+    assert_eq!(w, 2 * 40 + 3 * 8);
+    let line = String::from_utf8_lossy(&o.stdout);
+    // The uniform grid tests far more triangles per ray than the BVH on this scene.
+    let mean = |name: &str| -> f64 {
+        let rest = &line[line.find(&format!(" {name} ")).unwrap() + name.len() + 2..];
+        rest.split_whitespace().next().unwrap().parse().unwrap()
+    };
+    assert!(mean("grid") > 10.0 * mean("bvh"), "{line}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+#[test]
+fn bad_input_is_one_line_and_exit_2() {
+    let dir = scratch("bad");
+    let out = dir.join("x.png");
+    let out = out.to_str().unwrap();
+    assert_one_line_error(
+        &render(&["--structure", "octopus", "--out", out]),
+        "unknown structure `octopus`",
+    );
+    assert_one_line_error(
+        &render(&["--scene", "atlantis", "--out", out]),
+        "built-in scenes: whitted",
+    );
+    assert_one_line_error(
+        &render(&["--scene", "no/such/file.obj", "--out", out]),
+        "no/such/file.obj: cannot read file",
+    );
+    assert_one_line_error(
+        &render(&["--width", "0", "--out", out]),
+        "image size 0×768 is not usable",
+    );
+    assert_one_line_error(
+        &render(&["--height", "100000", "--out", out]),
+        "is not usable",
+    );
+    assert_one_line_error(&render(&["--depth", "0", "--out", out]), "--depth 0");
+    assert_one_line_error(
+        &render(&[
+            "--out",
+            "/no/such/dir/x.png",
+            "--width",
+            "8",
+            "--height",
+            "8",
+        ]),
+        "/no/such/dir/x.png: cannot write PNG",
+    );
+    assert_one_line_error(
+        &render(&["--out", dir.to_str().unwrap()]),
+        "it is a directory",
+    );
+    assert_one_line_error(
+        &render(&["--heatmap", "colours", "--out", out]),
+        "unknown heatmap metric `colours`",
+    );
+    assert_one_line_error(
+        &render(&[
+            "--heatmap",
+            "visits",
+            "--structures",
+            "bvh,nope",
+            "--out",
+            out,
+        ]),
+        "unknown structure `nope`",
+    );
+    assert!(!Path::new(out).exists(), "nothing is written on bad input");
+    if let Some(meshes) = shared_meshes_dir() {
+        let malformed = meshes.join("bad").join("malformed.obj");
+        assert_one_line_error(
+            &render(&["--scene", malformed.to_str().unwrap(), "--out", out]),
+            "malformed.obj:23:",
+        );
+    }
+    std::fs::remove_dir_all(&dir).ok();
+}

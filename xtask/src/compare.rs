@@ -192,7 +192,8 @@ fn select_entries(names: &[String]) -> Result<Vec<structures::Entry>, String> {
     Ok(out)
 }
 
-fn load_scene(spec: &str) -> Result<(String, Vec<Triangle>), String> {
+/// The triangles of a built-in scene or an OBJ file, or a one-line error.
+pub fn load_scene(spec: &str) -> Result<(String, Vec<Triangle>), String> {
     if let Some(mesh) = scenes::builtin(spec) {
         return Ok((spec.to_string(), mesh.triangles()));
     }

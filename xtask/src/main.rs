@@ -2,10 +2,12 @@
 //!
 //! One module per task, as in rust-analyzer's xtask. Tasks:
 //! - `compare`: the structure shootout (see [`compare`]).
+//! - `draw`: a slice through a built structure as SVG (see [`draw`]).
 //! - `render`: a Whitted-style picture through any structure, or per-pixel cost heatmaps (see
 //!   [`render`]).
 
 mod compare;
+mod draw;
 mod render;
 mod structures;
 
@@ -27,6 +29,9 @@ enum Task {
     /// Render a scene through one structure (Whitted-style: shadows, mirrors, glass) to a PNG,
     /// or, with `--heatmap`, the primary rays' cost per pixel for several structures.
     Render(render::Args),
+    /// Draw a slice through a built structure at an axis-aligned plane as SVG: its boxes, split
+    /// planes or cells there, and the mesh's cross-section.
+    Draw(draw::Args),
 }
 
 fn main() -> ExitCode {
@@ -42,6 +47,13 @@ fn main() -> ExitCode {
         Task::Compare(args) => match compare::run(&args) {
             Ok(report) if report.total_mismatches() == 0 => ExitCode::SUCCESS,
             Ok(_) => ExitCode::from(1),
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        },
+        Task::Draw(args) => match draw::run(&args) {
+            Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("error: {e}");
                 ExitCode::from(2)

@@ -75,7 +75,7 @@ pub fn run(args: &Args) -> Result<(), String> {
     }
     // Checked before any work, so a bad size fails at once, not after loading a mesh.
     rt_render::Image::new(args.width, args.height).map_err(|e| e.to_string())?;
-    check_output(&args.out)?;
+    check_output(&args.out, "PNG")?;
     let scene = load(&args.scene, args.width, args.height)?;
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
@@ -98,22 +98,22 @@ fn load(spec: &str, width: u32, height: u32) -> Result<RenderScene, String> {
     rt_render::scene(spec, width, height).map_err(|e| e.to_string())
 }
 
-/// Fails early, with the path, if the PNG cannot be written where asked.
-fn check_output(out: &Path) -> Result<(), String> {
+/// Fails early, with the path, if a `kind` file (`PNG`, `SVG`) cannot be written where asked.
+pub fn check_output(out: &Path, kind: &str) -> Result<(), String> {
     let dir = match out.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
     if !dir.is_dir() {
         return Err(format!(
-            "{}: cannot write PNG: directory {} does not exist",
+            "{}: cannot write {kind}: directory {} does not exist",
             out.display(),
             dir.display()
         ));
     }
     if out.is_dir() {
         return Err(format!(
-            "{}: cannot write PNG: it is a directory",
+            "{}: cannot write {kind}: it is a directory",
             out.display()
         ));
     }

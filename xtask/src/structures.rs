@@ -6,7 +6,7 @@
 
 use rayon::prelude::*;
 use rt_bvh::Bvh;
-use rt_core::{Accel, BruteForce, BuildStats, Counters, Hit, Ray, Shape, Triangle};
+use rt_core::{Accel, BruteForce, BuildStats, Counters, Hit, Ray, Region, Shape, Triangle};
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
 use rt_kdtree::KdTree;
@@ -33,6 +33,8 @@ pub trait Traceable: Send + Sync {
     fn trace_timed(&self, rays: &[Ray], query: Query) -> usize;
     /// One ray, for re-checking a disagreement.
     fn answer(&self, ray: &Ray, query: Query) -> Option<Hit>;
+    /// Every node or cell ([`Accel::regions`]), for `draw`.
+    fn regions(&self) -> Vec<Region>;
 }
 
 struct Built<A>(A);
@@ -83,6 +85,12 @@ impl<A: Accel<Prim = Triangle>> Traceable for Built<A> {
                 Query::Any => rays.iter().filter(|r| self.0.occluded(r)).count(),
             })
             .sum()
+    }
+
+    fn regions(&self) -> Vec<Region> {
+        let mut out = Vec::new();
+        self.0.regions(&mut |r| out.push(r));
+        out
     }
 
     fn answer(&self, ray: &Ray, query: Query) -> Option<Hit> {

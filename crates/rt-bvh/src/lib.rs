@@ -172,6 +172,7 @@
 mod builder;
 mod kernels;
 mod node;
+mod regions;
 mod simd;
 mod traverse;
 mod validate;
@@ -513,6 +514,10 @@ impl<P: Primitive> Accel for Bvh<P> {
             + self.packs.capacity() * size_of::<TriPack>()
             + self.prims.capacity() * size_of::<P>()
             + self.ids.capacity() * size_of::<u32>()
+    }
+
+    fn regions(&self, visit: &mut dyn FnMut(rt_core::Region)) {
+        self.walk_regions(visit);
     }
 
     fn build_stats(&self) -> BuildStats {

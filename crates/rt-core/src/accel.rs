@@ -80,6 +80,22 @@ impl BuildStats {
     }
 }
 
+/// One node or cell of a built structure, as [`Accel::regions`] describes it: for drawings of
+/// the structure (`cargo xtask draw`) and for teaching.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Region {
+    /// The part of space the node or cell covers (for a BVH, the box around its primitives).
+    pub bounds: crate::Aabb,
+    /// Its depth: 0 for the root (and for every cell of a uniform grid).
+    pub depth: u32,
+    /// How many primitive references a leaf or cell lists; `None` for an interior node or a
+    /// cell refined by a nested grid.
+    pub prims: Option<u32>,
+    /// For an interior node that cuts its box with a plane (a kd-tree's split): the axis and
+    /// the plane's coordinate.
+    pub split: Option<(usize, f32)>,
+}
+
 /// A ray-tracing acceleration structure over primitives of type [`Accel::Prim`].
 ///
 /// Contract, checked for every implementation by the conformance kit
@@ -138,6 +154,13 @@ pub trait Accel: Sized + Send + Sync {
 
     /// The structure's shape.
     fn build_stats(&self) -> BuildStats;
+
+    /// Calls `visit` for every node or cell, parents before their children. The default
+    /// describes nothing: a structure that does not implement it cannot be drawn, but is
+    /// otherwise complete.
+    fn regions(&self, visit: &mut dyn FnMut(Region)) {
+        let _ = visit;
+    }
 }
 
 /// A broken structural invariant, described in one sentence: what a structure's `validate`

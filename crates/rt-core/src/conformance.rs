@@ -169,8 +169,44 @@ pub fn check_case<A: Accel>(
             scene()
         ));
     }
+    check_regions(&accel).map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
     compare_rays(&accel, &reference, rays)
         .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))
+}
+
+/// Checks what [`Accel::regions`] reports against [`Accel::build_stats`], for structures that
+/// report regions at all: one region per node, one per leaf, the leaves' references summing to
+/// `prim_refs`, and finite boxes.
+///
+/// # Errors
+/// A sentence naming the first figure that does not match.
+pub fn check_regions<A: Accel>(accel: &A) -> Result<(), String> {
+    let (mut regions, mut leaves, mut refs, mut bad_box) = (0usize, 0usize, 0u64, None);
+    accel.regions(&mut |r| {
+        regions += 1;
+        if let Some(n) = r.prims {
+            leaves += 1;
+            refs += n as u64;
+        }
+        if bad_box.is_none() && !(r.bounds.min.is_finite() && r.bounds.max.is_finite()) {
+            bad_box = Some(r.bounds);
+        }
+    });
+    if regions == 0 {
+        return Ok(());
+    }
+    let stats = accel.build_stats();
+    if let Some(b) = bad_box {
+        return Err(format!("regions() reports a box that is not finite: {b:?}"));
+    }
+    if regions != stats.nodes || leaves != stats.leaves || refs != stats.prim_refs as u64 {
+        return Err(format!(
+            "regions() reports {regions} regions, {leaves} leaves and {refs} references, \
+             build_stats() {} nodes, {} leaves and {} references",
+            stats.nodes, stats.leaves, stats.prim_refs
+        ));
+    }
+    Ok(())
 }
 
 /// A fixed adversarial scene: triangles and the rays that probe them.

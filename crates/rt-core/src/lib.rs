@@ -53,7 +53,7 @@ mod triangle;
 pub mod conformance;
 
 pub use aabb::{Aabb, NEAR_TIE, SLAB_FAR_SCALE};
-pub use accel::{Accel, BuildStats, Hit, ValidationError};
+pub use accel::{Accel, BuildStats, Hit, Region, ValidationError};
 pub use brute::BruteForce;
 pub use clip::{clip_triangle_bounds, split_triangle_bounds};
 pub use mailbox::Mailbox;

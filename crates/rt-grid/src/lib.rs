@@ -96,6 +96,7 @@
 mod builder;
 mod cell;
 pub mod dda;
+mod regions;
 mod traverse;
 mod validate;
 
@@ -235,6 +236,10 @@ impl<P: Primitive> Accel for Grid<P> {
             + self.cells.capacity() * size_of::<u32>()
             + self.refs.capacity() * size_of::<u32>()
             + self.prims.capacity() * size_of::<P>()
+    }
+
+    fn regions(&self, visit: &mut dyn FnMut(rt_core::Region)) {
+        self.walk_regions(visit);
     }
 
     fn build_stats(&self) -> BuildStats {

@@ -80,6 +80,7 @@
 
 mod builder;
 mod node;
+mod regions;
 mod traverse;
 mod validate;
 
@@ -217,6 +218,10 @@ impl<P: Primitive> Accel for HGrid<P> {
             + self.cells.capacity() * size_of::<Cell>()
             + self.refs.capacity() * size_of::<u32>()
             + self.prims.capacity() * size_of::<P>()
+    }
+
+    fn regions(&self, visit: &mut dyn FnMut(rt_core::Region)) {
+        self.walk_regions(visit);
     }
 
     fn build_stats(&self) -> BuildStats {

@@ -135,6 +135,7 @@
 
 mod builder;
 mod node;
+mod regions;
 mod traverse;
 mod validate;
 
@@ -371,6 +372,10 @@ impl<P: Primitive> Accel for KdTree<P> {
             + self.nodes.capacity() * size_of::<Node>()
             + self.refs.capacity() * size_of::<u32>()
             + self.prims.capacity() * size_of::<P>()
+    }
+
+    fn regions(&self, visit: &mut dyn FnMut(rt_core::Region)) {
+        self.walk_regions(visit);
     }
 
     fn build_stats(&self) -> BuildStats {

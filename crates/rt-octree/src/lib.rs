@@ -125,6 +125,7 @@
 
 mod builder;
 mod node;
+mod regions;
 mod traverse;
 mod validate;
 
@@ -280,6 +281,10 @@ impl<P: Primitive> Accel for Octree<P> {
             + self.blocks.capacity() * size_of::<Block>()
             + self.refs.capacity() * size_of::<u32>()
             + self.prims.capacity() * size_of::<P>()
+    }
+
+    fn regions(&self, visit: &mut dyn FnMut(rt_core::Region)) {
+        self.walk_regions(visit);
     }
 
     fn build_stats(&self) -> BuildStats {

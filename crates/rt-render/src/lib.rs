@@ -12,6 +12,8 @@
 //!   error bound ([`rt_core::SurfacePoint::spawn_ray`]), never by a per-scene epsilon.
 //! - [`cost_map`] and [`heatmap_strip`]: the primary rays' node visits or primitive tests per
 //!   pixel, several structures side by side on one colour scale with a legend.
+//! - [`slice_svg`]: a drawing of a structure's nodes or cells ([`rt_core::Accel::regions`])
+//!   where they meet an axis-aligned plane, with the mesh's cross-section, as SVG.
 //! - [`Tracer`]: the renderer's object-safe view of a structure, implemented by every
 //!   [`Accel`](rt_core::Accel) over [`Shape`](rt_core::Shape)s.
 //!
@@ -35,6 +37,7 @@
 mod heatmap;
 mod image;
 mod scene;
+mod slice;
 mod tracer;
 mod whitted;
 
@@ -43,4 +46,5 @@ pub use heatmap::{
 };
 pub use image::{Image, ImageError, MAX_SIDE, RenderOptions, TILE, encode, render};
 pub use scene::{Material, PointLight, RenderScene, builtin_names, scene};
+pub use slice::{Coloring, SliceOptions, SliceSummary, cross_section, slice_svg, view_axes};
 pub use tracer::Tracer;

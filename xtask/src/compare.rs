@@ -11,7 +11,7 @@ use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rt_bvh::{Bvh, BvhParams};
 use rt_core::raygen;
 use rt_core::scenes::{self, BUILTIN_SCENES};
-use rt_core::{Aabb, Accel, Hit, Primitive, Ray, Rng, Triangle};
+use rt_core::{Aabb, Accel, Hit, PredictedCost, Primitive, Ray, Rng, Triangle, predicted_cost};
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -30,9 +30,17 @@ pub enum RayKind {
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
-    /// A built-in scene name (listed below) or the path of an .obj file.
-    #[arg(long, default_value = "sphereflake")]
+    /// A built-in scene name (listed below) or the path of an .obj file; repeat the flag to run
+    /// several scenes in turn.
+    #[arg(long = "scene", default_value = "sphereflake", value_name = "SCENE")]
+    pub scenes: Vec<String>,
+    /// The scene being measured (one of `scenes`, set by `run`).
+    #[arg(skip)]
     pub scene: String,
+    /// Also write `DIR/report.md` with SVG charts of every scene's figures and a heatmap strip
+    /// per scene.
+    #[arg(long, value_name = "DIR")]
+    pub report: Option<PathBuf>,
     /// Which rays to trace [default: primary].
     #[arg(long, value_enum)]
     pub rays: Option<RayKind>,
@@ -103,7 +111,26 @@ pub struct Row {
     pub avg_prim_tests: f64,
     pub mrays_per_s: f64,
     pub speedup: f64,
+    /// The SAH's expected visits and tests per traced ray (see [`predicted_per_ray`]), for
+    /// structures that describe their regions.
+    pub predicted: Option<PredictedCost>,
     answers: Vec<Option<Hit>>,
+}
+
+/// The cost the surface area heuristic predicts per traced ray: its expectation for a line
+/// through the structure's box ([`predicted_cost`]), times the share of `rays` that enter the
+/// scene box (`bounds`), so that it compares with the measured averages over all rays.
+pub fn predicted_per_ray(s: &dyn Traceable, rays: &[Ray], bounds: &Aabb) -> Option<PredictedCost> {
+    let per_line = predicted_cost(&s.regions())?;
+    let entering = rays
+        .iter()
+        .filter(|r| bounds.intersect(r, r.t_max).is_some())
+        .count() as f64
+        / rays.len().max(1) as f64;
+    Some(PredictedCost {
+        visits: per_line.visits * entering,
+        tests: per_line.tests * entering,
+    })
 }
 
 /// A ray on which a structure disagreed with brute force.
@@ -143,28 +170,52 @@ impl Report {
 /// # Errors
 /// One line describing bad input: unknown scene or structure, unreadable or malformed file,
 /// a scene without valid triangles.
-pub fn run(args: &Args) -> Result<Report, String> {
+pub fn run(args: &Args) -> Result<Vec<Report>, String> {
     let threads = args
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
     if threads == 0 {
         return Err("--threads must be at least 1".into());
     }
+    if let Some(dir) = &args.report {
+        crate::report::prepare(dir)?;
+    }
     let pool = rayon::ThreadPoolBuilder::new()
         .num_threads(threads)
         .build()
         .map_err(|e| format!("cannot start {threads} threads: {e}"))?;
-    let entries = select_entries(&args.structures)?;
-    let report = pool.install(|| measure(args, threads, entries))?;
-    if args.json {
-        println!("{}", to_json(&report));
-    } else {
-        print!("{}", to_table(&report));
+    // Every scene is loaded before any is measured, so a bad one fails at once.
+    for scene in &args.scenes {
+        load_scene(scene)?;
     }
-    if !report.disagreements.is_empty() {
-        eprint!("{}", describe_disagreements(&report, args));
+    let mut reports = Vec::new();
+    for scene in &args.scenes {
+        let args = Args {
+            scene: scene.clone(),
+            ..args.clone()
+        };
+        let entries = select_entries(&args.structures)?;
+        let report = pool.install(|| measure(&args, threads, entries))?;
+        if args.json {
+            println!("{}", to_json(&report));
+        } else {
+            if !reports.is_empty() {
+                println!();
+            }
+            print!("{}", to_table(&report));
+        }
+        if !report.disagreements.is_empty() {
+            eprint!("{}", describe_disagreements(&report, &args));
+        }
+        reports.push(report);
     }
-    Ok(report)
+    if let Some(dir) = &args.report {
+        let written = pool.install(|| crate::report::write(dir, &reports, args))?;
+        if !args.json {
+            println!("\nwrote {}", written.display());
+        }
+    }
+    Ok(reports)
 }
 
 fn select_entries(names: &[String]) -> Result<Vec<structures::Entry>, String> {
@@ -296,14 +347,16 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
         let s = s.expect("built at least once");
         progress.done();
         progress.step(format!("tracing {}", entry.name));
-        rows.push(trace_row(
+        let mut row = trace_row(
             &entry.name,
             s.as_ref(),
             build_ms,
             &rays,
             query,
             args.repeats,
-        ));
+        );
+        row.predicted = predicted_per_ray(s.as_ref(), &rays, &bounds);
+        rows.push(row);
         built.push(s);
         progress.done();
     }
@@ -466,6 +519,7 @@ fn trace_row(
         avg_prim_tests: counters.prim_tests as f64 / n,
         mrays_per_s: rays.len() as f64 / best.as_secs_f64().max(1e-9) / 1e6,
         speedup: 0.0,
+        predicted: None,
         answers,
     }
 }
@@ -531,6 +585,41 @@ fn to_table(r: &Report) -> String {
             row.duplication
         );
     }
+    // What the SAH predicts for lines spread uniformly over the scene box, beside what these
+    // rays did: how far the builders' cost model holds.
+    let modelled: Vec<&Row> = r
+        .rows
+        .iter()
+        .filter(|row| row.predicted.is_some())
+        .collect();
+    if !modelled.is_empty() {
+        let _ = writeln!(
+            s,
+            "\n{:<w$} {:>14} {:>14} {:>7} {:>14} {:>14} {:>7}",
+            "structure",
+            "visits (SAH)",
+            "visits (rays)",
+            "ratio",
+            "tests (SAH)",
+            "tests (rays)",
+            "ratio"
+        );
+        for row in modelled {
+            let p = row.predicted.expect("filtered");
+            let ratio = |m: f64, p: f64| if p > 0.0 { m / p } else { f64::NAN };
+            let _ = writeln!(
+                s,
+                "{:<w$} {:>14} {:>14} {:>7.2} {:>14} {:>14} {:>7.2}",
+                row.name,
+                three_digits(p.visits),
+                three_digits(row.avg_visits),
+                ratio(row.avg_visits, p.visits),
+                three_digits(p.tests),
+                three_digits(row.avg_prim_tests),
+                ratio(row.avg_prim_tests, p.tests)
+            );
+        }
+    }
     if r.rows.len() > 1 && r.total_mismatches() == 0 {
         let _ = writeln!(s, "all answers agree");
     }
@@ -585,6 +674,8 @@ fn to_json(r: &Report) -> String {
                 "prim_refs": row.prim_refs,
                 "duplication": row.duplication,
                 "rays_traced": row.rays_traced,
+                "predicted_visits": row.predicted.map(|p| p.visits),
+                "predicted_tests": row.predicted.map(|p| p.tests),
             });
             if r.per_ray_answers {
                 v["ray_hits"] = row.answers.iter().map(|&h| hit_json(h, any)).collect();
@@ -665,7 +756,9 @@ mod tests {
         }
         let mut v = vec!["compare"];
         v.extend_from_slice(extra);
-        Wrap::parse_from(v).args
+        let mut args = Wrap::parse_from(v).args;
+        args.scene = args.scenes[0].clone();
+        args
     }
 
     #[test]

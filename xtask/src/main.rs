@@ -1,7 +1,8 @@
 //! The rt-accel runner, invoked as `cargo xtask <task>` (an alias in `.cargo/config.toml`).
 //!
 //! One module per task, as in rust-analyzer's xtask. Tasks:
-//! - `compare`: the structure shootout (see [`compare`]).
+//! - `compare`: the structure shootout (see [`compare`]), with `--report DIR` a Markdown report
+//!   with charts (see [`report`]).
 //! - `draw`: a slice through a built structure as SVG (see [`draw`]).
 //! - `render`: a Whitted-style picture through any structure, or per-pixel cost heatmaps (see
 //!   [`render`]).
@@ -9,6 +10,7 @@
 mod compare;
 mod draw;
 mod render;
+mod report;
 mod structures;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
@@ -45,7 +47,7 @@ fn main() -> ExitCode {
     };
     match cli.task {
         Task::Compare(args) => match compare::run(&args) {
-            Ok(report) if report.total_mismatches() == 0 => ExitCode::SUCCESS,
+            Ok(reports) if reports.iter().all(|r| r.total_mismatches() == 0) => ExitCode::SUCCESS,
             Ok(_) => ExitCode::from(1),
             Err(e) => {
                 eprintln!("error: {e}");

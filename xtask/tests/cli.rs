@@ -344,3 +344,84 @@ fn every_bvh_preset_agrees_on_every_mesh_and_ray_kind() {
         }
     }
 }
+
+#[test]
+fn report_writes_markdown_charts_and_heatmaps_for_every_scene() {
+    let dir = std::env::temp_dir().join(format!("rt-accel-report-{}", std::process::id()));
+    let out = compare(&[
+        "--scene",
+        "random-soup",
+        "--scene",
+        "teapot-in-stadium",
+        "--structures",
+        "bvh,grid",
+        "--width",
+        "48",
+        "--height",
+        "36",
+        "--repeats",
+        "1",
+        "--report",
+        dir.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{out:?}");
+    let md = std::fs::read_to_string(dir.join("report.md")).unwrap();
+    for file in [
+        "mrays.svg",
+        "tests.svg",
+        "visits.svg",
+        "memory.svg",
+        "build.svg",
+        "model-tests.svg",
+        "model-visits.svg",
+        "heatmap-random-soup.png",
+        "heatmap-teapot-in-stadium.png",
+    ] {
+        assert!(md.contains(&format!("({file})")), "report.md lacks {file}");
+        let bytes = std::fs::read(dir.join(file)).unwrap();
+        assert!(bytes.len() > 1000, "{file} is nearly empty");
+        if file.ends_with(".svg") {
+            let text = String::from_utf8(bytes).unwrap();
+            assert!(text.contains("<svg") && text.contains("bvh"), "{file}");
+        }
+    }
+    // One section per scene, each with its table: brute force, bvh and grid.
+    assert!(md.contains("## random-soup") && md.contains("## teapot-in-stadium"));
+    assert_eq!(md.matches("| grid |").count(), 2);
+    std::fs::remove_dir_all(&dir).ok();
+
+    // An unwritable report directory is a one-line error before any measuring.
+    assert_one_line_error(
+        &compare(&["--report", "/proc/no-such-dir/report"]),
+        "cannot create report directory",
+    );
+}
+
+#[test]
+fn json_carries_the_sah_prediction_for_structures_that_describe_themselves() {
+    let v = json(&compare(&[
+        "--scene",
+        "random-soup",
+        "--structures",
+        "kdtree,grid",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--repeats",
+        "1",
+        "--json",
+    ]));
+    for row in v["results"].as_array().unwrap() {
+        let predicted = &row["predicted_tests"];
+        if row["structure"] == "brute-force" {
+            assert!(predicted.is_null());
+        } else {
+            let p = predicted.as_f64().unwrap();
+            assert!(
+                p > 0.1 && row["predicted_visits"].as_f64().unwrap() > 1.0,
+                "{row}"
+            );
+        }
+    }
+}

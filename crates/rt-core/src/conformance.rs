@@ -20,6 +20,10 @@
 //! the number of valid primitives it kept.
 //!
 //! The number of proptest cases is proptest's default (256) unless `PROPTEST_CASES` is set.
+//!
+//! The kit never hangs: every case runs on a thread of its own under a watchdog, and a build or
+//! a query that does not return within [`STALL_LIMIT`], or that panics, fails the case with the
+//! ray it was on (see [`check_case`]).
 
 use crate::{Accel, BruteForce, Counters, Hit, Primitive, Ray, Rng, Sphere, Triangle};
 use glam::Vec3;
@@ -71,7 +75,18 @@ pub fn compare_rays<A: Accel>(
     reference: &BruteForce<A::Prim>,
     rays: &[Ray],
 ) -> Result<(), Mismatch> {
+    compare_rays_probed(accel, reference, rays, &Probe::default())
+}
+
+/// [`compare_rays`], telling `probe` which ray each query is about before making it.
+fn compare_rays_probed<A: Accel>(
+    accel: &A,
+    reference: &BruteForce<A::Prim>,
+    rays: &[Ray],
+    probe: &Probe,
+) -> Result<(), Mismatch> {
     for ray in rays {
+        probe.tracing(ray);
         if !ray.is_valid() {
             // Outside the trait's precondition: the structure must answer at once, with no hit,
             // no primitive test and at most the root visited by each query (a NaN direction or
@@ -144,34 +159,165 @@ pub fn compare_rays<A: Accel>(
 /// structure reports the number of valid primitives it kept. Returns a message describing the
 /// first failure.
 ///
+/// The work runs on a thread of its own under a watchdog ([`check_case_within`] with
+/// [`STALL_LIMIT`]): a build or a query that does not return within the limit, or that panics,
+/// becomes a failure naming what it was doing: the build, or the ray (as Rust and as a
+/// rays-file line) and the query. A structure that loops forever on one ray therefore fails
+/// instead of hanging the test run (its thread is left spinning until the process exits).
+///
 /// # Errors
 /// A description of the first failure, with the scene when it has at most 12 primitives.
-pub fn check_case<A: Accel>(
+pub fn check_case<A: Accel + 'static>(
     params: &A::Params,
     prims: &[A::Prim],
     rays: &[Ray],
 ) -> Result<(), String> {
-    let reference = BruteForce::build(prims, &());
-    let accel = A::build(prims, params);
-    let scene = || {
-        if prims.len() <= 12 {
-            format!("\n  scene: {prims:?}")
-        } else {
-            format!("\n  scene: {} primitives", prims.len())
+    check_case_within::<A>(params, prims, rays, STALL_LIMIT)
+}
+
+/// How long the kit waits for one build or one query before it calls the structure stuck: 20
+/// seconds, a hundred times what the slowest build of the kit's scenes takes in a debug build.
+pub const STALL_LIMIT: std::time::Duration = std::time::Duration::from_secs(20);
+
+/// [`check_case`] with another limit for one build or one query.
+///
+/// # Errors
+/// As [`check_case`].
+pub fn check_case_within<A: Accel + 'static>(
+    params: &A::Params,
+    prims: &[A::Prim],
+    rays: &[Ray],
+    stall: std::time::Duration,
+) -> Result<(), String> {
+    let (params, prims, rays) = (params.clone(), prims.to_vec(), rays.to_vec());
+    let scene = scene_summary(&prims);
+    watched::<A>(stall, &scene, move |probe| {
+        probe.building(prims.len());
+        let reference = BruteForce::build(&prims, &());
+        let accel = A::build(&prims, &params);
+        probe.checking();
+        let scene = || scene_summary(&prims);
+        let valid = prims.iter().filter(|p| p.is_valid()).count();
+        let kept = accel.build_stats().valid_prims;
+        if kept != valid {
+            return Err(format!(
+                "{}: build_stats().valid_prims is {kept}, but {valid} primitives are valid{}",
+                A::NAME,
+                scene()
+            ));
         }
-    };
-    let valid = prims.iter().filter(|p| p.is_valid()).count();
-    let kept = accel.build_stats().valid_prims;
-    if kept != valid {
-        return Err(format!(
-            "{}: build_stats().valid_prims is {kept}, but {valid} primitives are valid{}",
-            A::NAME,
-            scene()
-        ));
+        check_regions(&accel)
+            .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
+        compare_rays_probed(&accel, &reference, &rays, probe)
+            .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))
+    })
+}
+
+/// The scene as failure messages show it: every primitive when there are at most 12.
+fn scene_summary<P: Primitive>(prims: &[P]) -> String {
+    if prims.len() <= 12 {
+        format!("\n  scene: {prims:?}")
+    } else {
+        format!("\n  scene: {} primitives", prims.len())
     }
-    check_regions(&accel).map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
-    compare_rays(&accel, &reference, rays)
-        .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))
+}
+
+/// What the kit's worker thread is doing, for the watchdog: a counter that moves at every
+/// step, and a description of the current one.
+#[derive(Default)]
+struct Probe {
+    steps: std::sync::atomic::AtomicU64,
+    doing: std::sync::Mutex<String>,
+}
+
+impl Probe {
+    fn set(&self, doing: String) {
+        if let Ok(mut d) = self.doing.lock() {
+            *d = doing;
+        }
+        self.steps
+            .fetch_add(1, std::sync::atomic::Ordering::Release);
+    }
+    fn building(&self, prims: usize) {
+        self.set(format!("building over {prims} primitives"));
+    }
+    fn checking(&self) {
+        self.set("checking build_stats() and regions()".into());
+    }
+    fn tracing(&self, ray: &Ray) {
+        self.steps
+            .fetch_add(1, std::sync::atomic::Ordering::Release);
+        if let Ok(mut d) = self.doing.lock() {
+            d.clear();
+            d.push_str("ray ");
+            d.push_str(&ray.to_rust());
+            d.push_str("\n  rays-file line: ");
+            d.push_str(&ray.to_line());
+        }
+    }
+    fn doing(&self) -> String {
+        self.doing.lock().map(|d| d.clone()).unwrap_or_default()
+    }
+}
+
+/// Runs `work` on its own thread and waits for it; a step (see [`Probe`]) that takes longer
+/// than `stall`, or a panic, becomes an error naming what the worker was doing.
+fn watched<A: Accel>(
+    stall: std::time::Duration,
+    scene: &str,
+    work: impl FnOnce(&Probe) -> Result<(), String> + Send + 'static,
+) -> Result<(), String> {
+    use std::sync::atomic::Ordering;
+    let probe = std::sync::Arc::new(Probe::default());
+    let (tx, rx) = std::sync::mpsc::channel();
+    let worker_probe = probe.clone();
+    let spawned = std::thread::Builder::new()
+        .name(format!("conformance {}", A::NAME))
+        .spawn(move || {
+            let result =
+                std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work(&worker_probe)));
+            let _ = tx.send(result);
+        });
+    if let Err(e) = spawned {
+        return Err(format!("cannot start the kit's worker thread: {e}"));
+    }
+    let mut last = (
+        probe.steps.load(Ordering::Acquire),
+        std::time::Instant::now(),
+    );
+    loop {
+        match rx.recv_timeout(std::time::Duration::from_millis(50)) {
+            Ok(Ok(result)) => return result,
+            Ok(Err(payload)) => {
+                let message = payload
+                    .downcast_ref::<&str>()
+                    .map(|s| s.to_string())
+                    .or_else(|| payload.downcast_ref::<String>().cloned())
+                    .unwrap_or_else(|| "a panic without a message".into());
+                return Err(format!(
+                    "{} panicked: {message}\n  while: {}{scene}",
+                    A::NAME,
+                    probe.doing()
+                ));
+            }
+            Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
+                return Err(format!("{}: the kit's worker thread vanished", A::NAME));
+            }
+            Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
+                let steps = probe.steps.load(Ordering::Acquire);
+                if steps != last.0 {
+                    last = (steps, std::time::Instant::now());
+                } else if last.1.elapsed() >= stall {
+                    return Err(format!(
+                        "{} {STALL_MARK} {:.0?} (a loop that never ends?)\n  while: {}{scene}",
+                        A::NAME,
+                        stall,
+                        probe.doing()
+                    ));
+                }
+            }
+        }
+    }
 }
 
 /// Checks what [`Accel::regions`] reports against [`Accel::build_stats`], for structures that
@@ -274,7 +420,7 @@ pub fn scene(name: &str) -> Scene {
 ///
 /// # Panics
 /// With a description of the first disagreement with brute force.
-pub fn check_scene<A: Accel<Prim = Triangle>>(params: &A::Params, name: &str) {
+pub fn check_scene<A: Accel<Prim = Triangle> + 'static>(params: &A::Params, name: &str) {
     let s = scene(name);
     if let Err(e) = check_case::<A>(params, &s.triangles, &s.rays) {
         panic!("conformance scene `{name}` failed: {e}");
@@ -289,7 +435,7 @@ pub fn check_scene<A: Accel<Prim = Triangle>>(params: &A::Params, name: &str) {
 ///
 /// # Panics
 /// With the shrunk failing case.
-pub fn check_random<A: Accel<Prim = Triangle>>(params: &A::Params) {
+pub fn check_random<A: Accel<Prim = Triangle> + 'static>(params: &A::Params) {
     let coord = || prop_oneof![(-6i32..=6).prop_map(|i| i as f32 * 0.5), -4.0f32..4.0];
     let vec3 = move || (coord(), coord(), coord()).prop_map(|(x, y, z)| Vec3::new(x, y, z));
     let tri = (vec3(), vec3(), vec3()).prop_map(|(a, b, c)| Triangle::new(a, b, c));
@@ -319,7 +465,11 @@ pub fn check_random<A: Accel<Prim = Triangle>>(params: &A::Params) {
         failure_persistence: None,
         ..Config::default()
     });
+    let stalled = std::sync::atomic::AtomicBool::new(false);
     let result = runner.run(&strategy, |(tris, specs)| {
+        if stalled.load(std::sync::atomic::Ordering::Relaxed) {
+            return Ok(());
+        }
         let rays: Vec<Ray> = specs
             .iter()
             .filter_map(|&(o, (dx, dy, dz), aim, t_max, t_min)| {
@@ -343,10 +493,49 @@ pub fn check_random<A: Accel<Prim = Triangle>>(params: &A::Params) {
                 r.is_valid().then_some(r)
             })
             .collect();
-        check_case::<A>(params, &tris, &rays).map_err(TestCaseError::fail)
+        check_case::<A>(params, &tris, &rays).map_err(|e| stall_stops_shrinking(&stalled, e))
     });
     if let Err(e) = result {
-        panic!("conformance proptest failed for {}: {e}", A::NAME);
+        panic!("{}", proptest_failure(A::NAME, "", e));
+    }
+}
+
+/// A failed case for proptest. After a stall every later case passes at once: shrinking a case
+/// that hangs would wait out the limit at every step, and the first stall already names its ray.
+fn stall_stops_shrinking(stalled: &std::sync::atomic::AtomicBool, e: String) -> TestCaseError {
+    if e.contains(STALL_MARK) {
+        stalled.store(true, std::sync::atomic::Ordering::Relaxed);
+    }
+    TestCaseError::fail(e)
+}
+
+/// The words that mark a stall in a failure message.
+const STALL_MARK: &str = "did not return within";
+
+/// The message of a failed proptest run: the failure (which names the ray and, when small, the
+/// scene) without the shrunk input's full dump, which for a large scene runs to hundreds of
+/// lines; `RT_CONFORMANCE_VERBOSE=1` adds it back.
+fn proptest_failure<T: fmt::Debug>(
+    name: &str,
+    what: &str,
+    e: proptest::test_runner::TestError<T>,
+) -> String {
+    use proptest::test_runner::TestError;
+    let verbose = std::env::var("RT_CONFORMANCE_VERBOSE").is_ok_and(|v| v == "1");
+    match e {
+        TestError::Fail(reason, input) => {
+            let mut m =
+                format!("conformance {what}proptest failed for {name} (shrunk case): {reason}");
+            if verbose {
+                m.push_str(&format!("\n  full input: {input:?}"));
+            } else {
+                m.push_str("\n  (RT_CONFORMANCE_VERBOSE=1 prints the whole shrunk input)");
+            }
+            m
+        }
+        TestError::Abort(reason) => {
+            format!("conformance {what}proptest aborted for {name}: {reason}")
+        }
     }
 }
 
@@ -354,7 +543,7 @@ pub fn check_random<A: Accel<Prim = Triangle>>(params: &A::Params) {
 ///
 /// # Panics
 /// With the shrunk failing case.
-pub fn check_random_spheres<A: Accel<Prim = Sphere>>(params: &A::Params) {
+pub fn check_random_spheres<A: Accel<Prim = Sphere> + 'static>(params: &A::Params) {
     let sphere = (
         prop::array::uniform3(-5.0f32..5.0),
         prop_oneof![0.01f32..2.0, Just(0.0), Just(f32::NAN)],
@@ -372,16 +561,20 @@ pub fn check_random_spheres<A: Accel<Prim = Sphere>>(params: &A::Params) {
         failure_persistence: None,
         ..Config::default()
     });
+    let stalled = std::sync::atomic::AtomicBool::new(false);
     let result = runner.run(&strategy, |(spheres, rays)| {
+        if stalled.load(std::sync::atomic::Ordering::Relaxed) {
+            return Ok(());
+        }
         let rays: Vec<Ray> = rays
             .into_iter()
             .map(|(o, d)| Ray::new(Vec3::from(o), Vec3::from(d)))
             .filter(Ray::is_valid)
             .collect();
-        check_case::<A>(params, &spheres, &rays).map_err(TestCaseError::fail)
+        check_case::<A>(params, &spheres, &rays).map_err(|e| stall_stops_shrinking(&stalled, e))
     });
     if let Err(e) = result {
-        panic!("conformance sphere proptest failed for {}: {e}", A::NAME);
+        panic!("{}", proptest_failure(A::NAME, "sphere ", e));
     }
 }
 
@@ -390,7 +583,7 @@ pub fn check_random_spheres<A: Accel<Prim = Sphere>>(params: &A::Params) {
 ///
 /// # Panics
 /// At the first failure.
-pub fn check_all<A: Accel<Prim = Triangle>>(params: &A::Params) {
+pub fn check_all<A: Accel<Prim = Triangle> + 'static>(params: &A::Params) {
     for name in SCENES {
         check_scene::<A>(params, name);
     }

@@ -2,9 +2,9 @@
 //! boxes, split planes or cells where they meet the plane, and the mesh's cross-section. The
 //! drawing is `rt_render::slice_svg`; this module reads flags, builds the row and writes the file.
 
-use crate::{compare, structures};
 use rt_core::{Aabb, Primitive};
 use rt_render::{Coloring, SliceOptions};
+use rt_shootout::{compare, structures};
 use std::path::PathBuf;
 
 /// Flags of `cargo xtask draw`.
@@ -52,7 +52,7 @@ pub fn run(args: &Args) -> Result<(), String> {
     }
     let coloring = Coloring::parse(&args.color)?;
     crate::render::check_output(&args.out, "SVG")?;
-    let entry = structures::find(&args.structure)?;
+    let entry = structures::find(&structures::all(), &args.structure)?;
     let (_, triangles) = compare::load_scene(&args.scene)?;
     let built = (entry.build)(&triangles);
     let regions = built.regions();

@@ -1,17 +1,14 @@
 //! The rt-accel runner, invoked as `cargo xtask <task>` (an alias in `.cargo/config.toml`).
 //!
 //! One module per task, as in rust-analyzer's xtask. Tasks:
-//! - `compare`: the structure shootout (see [`compare`]), with `--report DIR` a Markdown report
-//!   with charts (see [`report`]).
+//! - `compare`: the structure shootout, with `--report DIR` a Markdown report with charts: the
+//!   `rt-shootout` library, which other crates call with their own structures added.
 //! - `draw`: a slice through a built structure as SVG (see [`draw`]).
 //! - `render`: a Whitted-style picture through any structure, or per-pixel cost heatmaps (see
 //!   [`render`]).
 
-mod compare;
 mod draw;
 mod render;
-mod report;
-mod structures;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::process::ExitCode;
@@ -27,7 +24,7 @@ struct Cli {
 enum Task {
     /// Build every structure on one scene, trace the same rays through each, check every answer
     /// against brute force and the others, and print cost and speed.
-    Compare(compare::Args),
+    Compare(rt_shootout::Args),
     /// Render a scene through one structure (Whitted-style: shadows, mirrors, glass) to a PNG,
     /// or, with `--heatmap`, the primary rays' cost per pixel for several structures.
     Render(render::Args),
@@ -38,7 +35,11 @@ enum Task {
 
 fn main() -> ExitCode {
     let command = Cli::command()
-        .mut_subcommand("compare", |c| c.after_help(compare::after_help()))
+        .mut_subcommand("compare", |c| {
+            c.after_help(rt_shootout::compare::after_help(
+                &rt_shootout::structures::all(),
+            ))
+        })
         .mut_subcommand("render", |c| c.after_help(render::after_help()));
     let matches = command.get_matches();
     let cli = match Cli::from_arg_matches(&matches) {
@@ -46,14 +47,7 @@ fn main() -> ExitCode {
         Err(e) => e.exit(),
     };
     match cli.task {
-        Task::Compare(args) => match compare::run(&args) {
-            Ok(reports) if reports.iter().all(|r| r.total_mismatches() == 0) => ExitCode::SUCCESS,
-            Ok(_) => ExitCode::from(1),
-            Err(e) => {
-                eprintln!("error: {e}");
-                ExitCode::from(2)
-            }
-        },
+        Task::Compare(args) => rt_shootout::exit_code(rt_shootout::Shootout::new().run(&args)),
         Task::Draw(args) => match draw::run(&args) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {

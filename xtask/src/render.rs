@@ -2,9 +2,9 @@
 //! cost heatmaps of several side by side. The renderer is the `rt-render` library; this module
 //! only reads flags, picks the scene and structures, shows progress and writes the PNG.
 
-use crate::structures;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rt_render::{Metric, RenderOptions, RenderScene};
+use rt_shootout::structures;
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -120,6 +120,16 @@ pub fn check_output(out: &Path, kind: &str) -> Result<(), String> {
     Ok(())
 }
 
+/// The row's builder over triangles and spheres, or why it cannot render.
+fn shape_builder(entry: &structures::Entry) -> Result<structures::ShapeBuilder, String> {
+    entry.build_shapes.clone().ok_or_else(|| {
+        format!(
+            "{} is built over triangles only, so it cannot render scenes with spheres",
+            entry.name
+        )
+    })
+}
+
 fn progress_bar(label: &str) -> ProgressBar {
     let bar = ProgressBar::with_draw_target(
         None,
@@ -138,10 +148,10 @@ fn progress_bar(label: &str) -> ProgressBar {
 }
 
 fn picture(args: &Args, scene: &RenderScene, threads: usize) -> Result<(), String> {
-    let entry = structures::find(&args.structure)?;
+    let entry = structures::find(&structures::all(), &args.structure)?;
     let shapes = scene.shapes();
     let start = Instant::now();
-    let tracer = (entry.build_shapes)(&shapes);
+    let tracer = shape_builder(&entry)?(&shapes);
     let build = start.elapsed();
     let options = RenderOptions {
         width: args.width,
@@ -179,7 +189,7 @@ fn heatmaps(args: &Args, scene: &RenderScene, metric: &str) -> Result<(), String
     let entries = args
         .structures
         .iter()
-        .map(|n| structures::find(n))
+        .map(|n| structures::find(&structures::all(), n))
         .collect::<Result<Vec<_>, _>>()?;
     if entries.is_empty() {
         return Err("--structures names no structure".into());
@@ -187,7 +197,7 @@ fn heatmaps(args: &Args, scene: &RenderScene, metric: &str) -> Result<(), String
     let shapes = scene.shapes();
     let mut panels = Vec::new();
     for entry in &entries {
-        let tracer = (entry.build_shapes)(&shapes);
+        let tracer = shape_builder(entry)?(&shapes);
         let bar = progress_bar(&format!("{} {}", metric.name(), entry.name));
         let costs = rt_render::cost_map(
             scene,
@@ -238,7 +248,7 @@ mod tests {
         };
         let mut reference: Option<(String, rt_render::Image)> = None;
         for entry in structures::all() {
-            let tracer = (entry.build_shapes)(&shapes);
+            let tracer = shape_builder(&entry).unwrap()(&shapes);
             let image =
                 rt_render::render(&scene, &shapes, tracer.as_ref(), &options, &|_, _| {}).unwrap();
             match &reference {

@@ -78,13 +78,13 @@ pub struct Args {
 }
 
 /// The text after `--help`: built-in scenes and structure rows.
-pub fn after_help() -> String {
+pub fn after_help(entries: &[structures::Entry]) -> String {
     let mut s = String::from("Built-in scenes:\n");
     for b in BUILTIN_SCENES {
         let _ = writeln!(s, "  {:<14} {}", b.name, b.description);
     }
     s.push_str("\nStructure rows:\n");
-    for e in structures::all() {
+    for e in entries {
         let _ = writeln!(s, "  {}", e.name);
     }
     s.push_str("\nExit status: 0 when every answer agrees, 1 on any mismatch, 2 on bad input.");
@@ -159,18 +159,19 @@ pub struct Report {
 }
 
 impl Report {
+    /// Mismatches over every row.
     pub fn total_mismatches(&self) -> usize {
         self.rows.iter().map(|r| r.mismatches).sum()
     }
 }
 
-/// Runs the comparison and prints the report (table or JSON) to stdout; disagreements go to
-/// stderr.
+/// Runs the comparison of the rows among `entries` that `args` selects (all by default) on each
+/// scene, and prints the report (table or JSON) to stdout; disagreements go to stderr.
 ///
 /// # Errors
 /// One line describing bad input: unknown scene or structure, unreadable or malformed file,
 /// a scene without valid triangles.
-pub fn run(args: &Args) -> Result<Vec<Report>, String> {
+pub fn run(args: &Args, entries: &[structures::Entry]) -> Result<Vec<Report>, String> {
     let threads = args
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
@@ -194,7 +195,7 @@ pub fn run(args: &Args) -> Result<Vec<Report>, String> {
             scene: scene.clone(),
             ..args.clone()
         };
-        let entries = select_entries(&args.structures)?;
+        let entries = select_entries(entries, &args.structures)?;
         let report = pool.install(|| measure(&args, threads, entries))?;
         if args.json {
             println!("{}", to_json(&report));
@@ -210,7 +211,7 @@ pub fn run(args: &Args) -> Result<Vec<Report>, String> {
         reports.push(report);
     }
     if let Some(dir) = &args.report {
-        let written = pool.install(|| crate::report::write(dir, &reports, args))?;
+        let written = pool.install(|| crate::report::write(dir, &reports, args, entries))?;
         if !args.json {
             println!("\nwrote {}", written.display());
         }
@@ -218,8 +219,11 @@ pub fn run(args: &Args) -> Result<Vec<Report>, String> {
     Ok(reports)
 }
 
-fn select_entries(names: &[String]) -> Result<Vec<structures::Entry>, String> {
-    let all = structures::all();
+fn select_entries(
+    entries: &[structures::Entry],
+    names: &[String],
+) -> Result<Vec<structures::Entry>, String> {
+    let all = entries.to_vec();
     if names.is_empty() || names.iter().any(|n| n == "all") {
         return Ok(all);
     }

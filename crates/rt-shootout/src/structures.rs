@@ -1,8 +1,8 @@
-//! The structures `compare` knows, behind one object-safe interface.
+//! The rows of a shootout: structure types and presets behind one object-safe interface.
 //!
-//! [`rt_core::Accel`] is generic (and so not object-safe); `compare` needs a list. Each entry
-//! wraps one structure type and preset. Dispatch is dynamic only per batch of rays: the batch
-//! loop itself is monomorphized, so timings measure the structure, not the wrapper.
+//! [`rt_core::Accel`] is generic (and so not object-safe); a shootout needs a list. Each
+//! [`Entry`] wraps one structure type and preset. Dispatch is dynamic only per batch of rays: the
+//! batch loop itself is monomorphized, so timings measure the structure, not the wrapper.
 
 use rayon::prelude::*;
 use rt_bvh::Bvh;
@@ -12,6 +12,7 @@ use rt_hgrid::HGrid;
 use rt_kdtree::KdTree;
 use rt_octree::Octree;
 use rt_render::Tracer;
+use std::sync::Arc;
 
 /// Which query a run makes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -24,7 +25,9 @@ pub enum Query {
 
 /// A built structure, ready to trace.
 pub trait Traceable: Send + Sync {
+    /// [`Accel::memory_bytes`].
     fn memory_bytes(&self) -> usize;
+    /// [`Accel::build_stats`].
     fn build_stats(&self) -> BuildStats;
     /// Answers for every ray, with counters, in parallel over the current rayon pool.
     fn trace_counted(&self, rays: &[Ray], query: Query) -> (Vec<Option<Hit>>, Counters);
@@ -102,21 +105,43 @@ impl<A: Accel<Prim = Triangle>> Traceable for Built<A> {
 }
 
 /// Builds one row's structure over a scene.
-pub type Builder = Box<dyn Fn(&[Triangle]) -> Box<dyn Traceable> + Send + Sync>;
+pub type Builder = Arc<dyn Fn(&[Triangle]) -> Box<dyn Traceable> + Send + Sync>;
 
 /// Builds one row's structure over triangles and spheres, for `render`.
-pub type ShapeBuilder = Box<dyn Fn(&[Shape]) -> Box<dyn Tracer> + Send + Sync>;
+pub type ShapeBuilder = Arc<dyn Fn(&[Shape]) -> Box<dyn Tracer> + Send + Sync>;
 
-/// One row `compare` and `render` can run: a structure type with one preset.
+/// One row a shootout can run: a structure type with one preset.
+#[derive(Clone)]
 pub struct Entry {
-    /// Row name: the crate name without `rt-` for the default preset, `name-preset` otherwise.
+    /// Row name: the structure's [`Accel::NAME`] for its first preset, `NAME-preset` otherwise.
     pub name: String,
+    /// Builds it over triangles.
     pub build: Builder,
-    pub build_shapes: ShapeBuilder,
+    /// Builds the same type and preset over [`Shape`]s, when the structure is generic over its
+    /// primitive (see [`entries_of`]); `None` for triangle-only structures, which `render`
+    /// cannot use.
+    pub build_shapes: Option<ShapeBuilder>,
+}
+
+impl std::fmt::Debug for Entry {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Entry")
+            .field("name", &self.name)
+            .field("renders", &self.build_shapes.is_some())
+            .finish_non_exhaustive()
+    }
+}
+
+fn row_name<A: Accel>(i: usize, preset: &str) -> String {
+    if i == 0 {
+        A::NAME.to_string()
+    } else {
+        format!("{}-{preset}", A::NAME)
+    }
 }
 
 /// Every preset of a structure type, `A` over triangles and `S` the same type over [`Shape`]s
-/// (the same presets apply to both).
+/// (the same presets apply to both), so the rows can also render.
 pub fn entries_of<A, S>() -> Vec<Entry>
 where
     A: Accel<Prim = Triangle> + 'static,
@@ -128,18 +153,33 @@ where
         .map(|(i, (preset, params))| {
             let for_shapes = params.clone();
             Entry {
-                name: if i == 0 {
-                    A::NAME.to_string()
-                } else {
-                    format!("{}-{preset}", A::NAME)
-                },
-                build: Box::new(move |tris: &[Triangle]| {
+                name: row_name::<A>(i, preset),
+                build: Arc::new(move |tris: &[Triangle]| {
                     Box::new(Built(A::build(tris, &params))) as Box<dyn Traceable>
                 }),
-                build_shapes: Box::new(move |shapes: &[Shape]| {
+                build_shapes: Some(Arc::new(move |shapes: &[Shape]| {
                     Box::new(S::build(shapes, &for_shapes)) as Box<dyn Tracer>
-                }),
+                })),
             }
+        })
+        .collect()
+}
+
+/// Every preset of a structure type over triangles only (a student's first structure, say):
+/// rows for `compare`, not for `render`.
+pub fn entries_of_triangles<A>() -> Vec<Entry>
+where
+    A: Accel<Prim = Triangle> + 'static,
+{
+    A::presets()
+        .into_iter()
+        .enumerate()
+        .map(|(i, (preset, params))| Entry {
+            name: row_name::<A>(i, preset),
+            build: Arc::new(move |tris: &[Triangle]| {
+                Box::new(Built(A::build(tris, &params))) as Box<dyn Traceable>
+            }),
+            build_shapes: None,
         })
         .collect()
 }
@@ -154,7 +194,7 @@ where
     entries_of::<A, S>().remove(0)
 }
 
-/// Every structure and preset, in report order.
+/// Every built-in structure and preset, in report order.
 pub fn all() -> Vec<Entry> {
     let mut all = entries_of::<Bvh<Triangle>, Bvh<Shape>>();
     all.extend(entries_of::<KdTree<Triangle>, KdTree<Shape>>());
@@ -169,21 +209,26 @@ pub fn brute_force() -> Entry {
     entries_of::<BruteForce<Triangle>, BruteForce<Shape>>().remove(0)
 }
 
-/// The entry called `name` (a row of [`all`], or `brute-force`), or an error listing the names.
-pub fn find(name: &str) -> Result<Entry, String> {
+/// The entry called `name` among `entries`, or `brute-force`; else an error listing the names.
+///
+/// # Errors
+/// One line naming the unknown structure and the known ones.
+pub fn find(entries: &[Entry], name: &str) -> Result<Entry, String> {
     if name == "brute-force" {
         return Ok(brute_force());
     }
-    let mut entries = all();
-    match entries.iter().position(|e| e.name == name) {
-        Some(i) => Ok(entries.swap_remove(i)),
-        None => Err(format!(
-            "unknown structure `{name}` (known: {}, brute-force)",
-            entries
-                .iter()
-                .map(|e| e.name.as_str())
-                .collect::<Vec<_>>()
-                .join(", ")
-        )),
-    }
+    entries
+        .iter()
+        .find(|e| e.name == name)
+        .cloned()
+        .ok_or_else(|| {
+            format!(
+                "unknown structure `{name}` (known: {}, brute-force)",
+                entries
+                    .iter()
+                    .map(|e| e.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            )
+        })
 }

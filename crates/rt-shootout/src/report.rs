@@ -247,18 +247,28 @@ fn model_chart(
     root.present().map_err(|e| chart_error(path, e))
 }
 
-/// The heatmap strip of primary-ray primitive tests on `scene` for the selected rows among the
-/// five default structures, or `None` if none of them was selected.
+/// The heatmap strip of primary-ray primitive tests on `scene` for the rows that ran and can
+/// render, among the five default structures and any structure added to the built-in ones (a
+/// student's), or `None` if there are none.
 fn heatmap(
     dir: &Path,
     scene: &str,
     report: &Report,
     args: &Args,
+    entries: &[structures::Entry],
 ) -> Result<Option<String>, String> {
     let defaults = ["bvh", "kdtree", "grid", "hgrid", "octree"];
-    let names: Vec<&str> = defaults
-        .into_iter()
-        .filter(|d| report.rows.iter().any(|r| r.name == *d))
+    let built_in: Vec<String> = structures::all().into_iter().map(|e| e.name).collect();
+    let names: Vec<&str> = report
+        .rows
+        .iter()
+        .map(|r| r.name.as_str())
+        .filter(|n| defaults.contains(n) || !built_in.iter().any(|b| b == n))
+        .filter(|n| {
+            entries
+                .iter()
+                .any(|e| e.name == *n && e.build_shapes.is_some())
+        })
         .collect();
     if names.is_empty() {
         return Ok(None);
@@ -271,8 +281,11 @@ fn heatmap(
     let shapes = render_scene.shapes();
     let mut panels = Vec::new();
     for name in names {
-        let entry = structures::find(name)?;
-        let tracer = (entry.build_shapes)(&shapes);
+        let entry = structures::find(entries, name)?;
+        let Some(build) = &entry.build_shapes else {
+            continue;
+        };
+        let tracer = build(&shapes);
         let costs = rt_render::cost_map(
             &render_scene,
             tracer.as_ref(),
@@ -324,7 +337,12 @@ fn markdown_table(r: &Report) -> String {
 ///
 /// # Errors
 /// One line naming a file that could not be written.
-pub fn write(dir: &Path, reports: &[Report], args: &Args) -> Result<PathBuf, String> {
+pub fn write(
+    dir: &Path,
+    reports: &[Report],
+    args: &Args,
+    entries: &[structures::Entry],
+) -> Result<PathBuf, String> {
     let mut md = String::from("# rt-accel shootout\n\n");
     let command: Vec<String> = std::env::args().skip(1).collect();
     let _ = writeln!(
@@ -378,7 +396,7 @@ pub fn write(dir: &Path, reports: &[Report], args: &Args) -> Result<PathBuf, Str
             report.checked_rays
         );
         md.push_str(&markdown_table(report));
-        if let Some(file) = heatmap(dir, scene, report, args)? {
+        if let Some(file) = heatmap(dir, scene, report, args, entries)? {
             let _ = writeln!(
                 md,
                 "\nPrimitive tests of each pixel's primary ray (one shared colour scale):\n\n![heatmap of {}]({file})",

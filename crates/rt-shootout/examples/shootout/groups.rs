@@ -1,0 +1,80 @@
+//! A small structure of the kind a student writes first, for the shootout example and its test.
+
+use rt_core::{Aabb, Accel, BuildStats, Hit, Primitive, Ray, Stats, Triangle};
+
+/// A one-level hierarchy: triangles sorted along x in groups of 16, each group with its box; a
+/// ray tests every group's box, then the triangles of the groups it enters.
+pub struct Groups {
+    tris: Vec<(u32, Triangle)>,
+    boxes: Vec<Aabb>,
+}
+
+/// Triangles per group.
+pub const GROUP: usize = 16;
+
+impl Accel for Groups {
+    type Prim = Triangle;
+    type Params = ();
+    const NAME: &'static str = "groups";
+    fn presets() -> Vec<(&'static str, ())> {
+        vec![("default", ())]
+    }
+    fn build(prims: &[Triangle], _: &()) -> Self {
+        let mut tris: Vec<(u32, Triangle)> = prims
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.is_valid())
+            .map(|(i, t)| (i as u32, *t))
+            .collect();
+        tris.sort_by(|a, b| a.1.centroid().x.total_cmp(&b.1.centroid().x));
+        let boxes = tris
+            .chunks(GROUP)
+            .map(|c| c.iter().fold(Aabb::EMPTY, |b, (_, t)| b.union(t.bounds())))
+            .collect();
+        Self { tris, boxes }
+    }
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        if !ray.is_valid() {
+            return None;
+        }
+        let mut best: Option<Hit> = None;
+        for (g, b) in self.boxes.iter().enumerate() {
+            stats.node_visit();
+            if b.intersect(ray, ray.t_max).is_none() {
+                continue;
+            }
+            for &(id, t) in &self.tris[g * GROUP..((g + 1) * GROUP).min(self.tris.len())] {
+                stats.prim_test();
+                let t_max = best.map_or(ray.t_max, |h| h.t);
+                if let Some(h) = t.intersect(ray, t_max)
+                    && best.is_none_or(|b| Hit::beats(h.t, id, b.t, b.prim))
+                {
+                    best = Some(Hit {
+                        prim: id,
+                        t: h.t,
+                        u: h.u,
+                        v: h.v,
+                    });
+                }
+            }
+        }
+        best
+    }
+    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+        self.intersect_with(ray, stats).is_some()
+    }
+    fn memory_bytes(&self) -> usize {
+        self.tris.capacity() * size_of::<(u32, Triangle)>()
+            + self.boxes.capacity() * size_of::<Aabb>()
+    }
+    fn build_stats(&self) -> BuildStats {
+        BuildStats {
+            nodes: self.boxes.len(),
+            leaves: self.boxes.len(),
+            prim_refs: self.tris.len(),
+            valid_prims: self.tris.len(),
+            max_depth: 0,
+            ..BuildStats::default()
+        }
+    }
+}

@@ -1,0 +1,153 @@
+//! The rt-accel shootout as a library: what `cargo xtask compare` runs, for anyone's structure.
+//!
+//! It builds every selected structure on the same scene, traces the same rays through each,
+//! checks every answer (against brute force on a random subset, against each other on all rays,
+//! and against brute force again wherever they disagree), and reports build time, memory, shape,
+//! node visits and primitive tests per ray, the surface area heuristic's prediction of those,
+//! and speed: as a table, JSON (`--json`), or a Markdown report with charts (`--report DIR`).
+//!
+//! A structure from another crate joins the built-in rows in a few lines, with every flag of
+//! `compare`. In that crate's `examples/shootout.rs`:
+//!
+//! ```no_run
+//! # use rt_core::{Accel, BruteForce, Triangle};
+//! # type MyGrid = BruteForce<Triangle>; // your structure here
+//! fn main() -> std::process::ExitCode {
+//!     rt_shootout::Shootout::new()
+//!         .with_triangles::<MyGrid>() // or `.with::<MyGrid<Triangle>, MyGrid<Shape>>()`
+//!         .main()
+//! }
+//! ```
+//!
+//! and then `cargo run --release --example shootout -- --scene teapot-in-stadium`, or
+//! `--structures mine,grid,bvh --json`, or `--report out`, as with `cargo xtask compare`.
+//! The crate needs `rt-core` and `rt-shootout` as dependencies (see the workspace README).
+
+pub mod compare;
+pub mod report;
+pub mod structures;
+
+pub use compare::{Args, Report, Row};
+pub use structures::{Entry, Traceable, entries_of, entries_of_triangles};
+
+use clap::{CommandFactory, FromArgMatches, Parser};
+use rt_core::{Accel, Shape, Triangle};
+use std::process::ExitCode;
+
+/// A set of rows to compare: the built-in structures and presets, plus any added.
+#[derive(Clone, Debug)]
+pub struct Shootout {
+    entries: Vec<Entry>,
+}
+
+impl Default for Shootout {
+    fn default() -> Self {
+        Self::new()
+    }
+}
+
+/// The command line of [`Shootout::main`]: `compare`'s flags.
+#[derive(Parser, Debug)]
+#[command(
+    about = "Build structures on one scene, trace the same rays through each, check every answer against brute force and the others, and print cost and speed."
+)]
+struct Cli {
+    #[command(flatten)]
+    args: Args,
+}
+
+impl Shootout {
+    /// Every built-in structure and preset (rt-bvh, rt-kdtree, rt-grid, rt-hgrid, rt-octree).
+    pub fn new() -> Self {
+        Self {
+            entries: structures::all(),
+        }
+    }
+
+    /// No rows at all, for a shootout of only the structures added next.
+    pub fn empty() -> Self {
+        Self {
+            entries: Vec::new(),
+        }
+    }
+
+    /// Adds every preset of a structure generic over its primitive: `A` over triangles, `S` the
+    /// same type over [`Shape`]s (so that `render` can use it too).
+    pub fn with<A, S>(mut self) -> Self
+    where
+        A: Accel<Prim = Triangle> + 'static,
+        S: Accel<Prim = Shape, Params = A::Params> + 'static,
+    {
+        self.entries.extend(entries_of::<A, S>());
+        self
+    }
+
+    /// Adds every preset of a structure over triangles.
+    pub fn with_triangles<A>(mut self) -> Self
+    where
+        A: Accel<Prim = Triangle> + 'static,
+    {
+        self.entries.extend(entries_of_triangles::<A>());
+        self
+    }
+
+    /// Adds rows made some other way.
+    pub fn with_entries(mut self, entries: impl IntoIterator<Item = Entry>) -> Self {
+        self.entries.extend(entries);
+        self
+    }
+
+    /// The rows, in report order.
+    pub fn entries(&self) -> &[Entry] {
+        &self.entries
+    }
+
+    /// Runs the comparison with `args` (see [`compare::run`]).
+    ///
+    /// # Errors
+    /// One line describing bad input.
+    pub fn run(&self, args: &Args) -> Result<Vec<Report>, String> {
+        compare::run(args, &self.entries)
+    }
+
+    /// Parses `compare`'s flags from the process's arguments (`--help` lists the scenes and
+    /// these rows), runs, and returns the exit status `cargo xtask compare` uses: 0 when every
+    /// answer agrees, 1 on any mismatch, 2 on bad input (after one `error:` line).
+    pub fn main(&self) -> ExitCode {
+        let command = Cli::command().after_help(compare::after_help(&self.entries));
+        let cli = match Cli::from_arg_matches(&command.get_matches()) {
+            Ok(cli) => cli,
+            Err(e) => e.exit(),
+        };
+        exit_code(self.run(&cli.args))
+    }
+}
+
+/// `compare`'s flags parsed from `flags` (without a program name), for running a shootout from
+/// code: `args_from(["--scene", "random-soup", "--json"])`.
+///
+/// # Errors
+/// clap's message for flags it does not accept.
+pub fn args_from<I, T>(flags: I) -> Result<Args, String>
+where
+    I: IntoIterator<Item = T>,
+    T: Into<std::ffi::OsString> + Clone,
+{
+    let argv = std::iter::once(std::ffi::OsString::from("shootout"))
+        .chain(flags.into_iter().map(Into::into));
+    let mut args = Cli::try_parse_from(argv).map_err(|e| e.to_string())?.args;
+    args.scene = args.scenes.first().cloned().unwrap_or_default();
+    Ok(args)
+}
+
+/// The exit status for a comparison's outcome, printing the error line if there is one.
+pub fn exit_code(outcome: Result<Vec<Report>, String>) -> ExitCode {
+    match outcome {
+        Ok(reports) if reports.iter().all(|r| r.total_mismatches() == 0) => ExitCode::SUCCESS,
+        Ok(_) => ExitCode::from(1),
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(2)
+        }
+    }
+}

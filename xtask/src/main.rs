@@ -47,7 +47,7 @@ fn main() -> ExitCode {
         Err(e) => e.exit(),
     };
     match cli.task {
-        Task::Compare(args) => rt_shootout::exit_code(rt_shootout::Shootout::new().run(&args)),
+        Task::Compare(args) => rt_shootout::Shootout::new().main_with(&args),
         Task::Draw(args) => match draw::run(&args) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {

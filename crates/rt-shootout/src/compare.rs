@@ -41,6 +41,12 @@ pub struct Args {
     /// per scene.
     #[arg(long, value_name = "DIR")]
     pub report: Option<PathBuf>,
+    /// Grade this row instead: run the conformance kit on it (every scene passed or failed, the
+    /// first failing ray of each), then the shootout against `--structures` (default bvh,
+    /// kdtree, grid), and write `grade.json` and `grade.md` into `--report DIR` (default
+    /// `grade`).
+    #[arg(long, value_name = "ROW")]
+    pub grade: Option<String>,
     /// Which rays to trace [default: primary].
     #[arg(long, value_enum)]
     pub rays: Option<RayKind>,

@@ -24,6 +24,7 @@
 //! The crate needs `rt-core` and `rt-shootout` as dependencies (see the workspace README).
 
 pub mod compare;
+pub mod grade;
 pub mod report;
 pub mod structures;
 
@@ -32,6 +33,7 @@ pub use structures::{Entry, Traceable, entries_of, entries_of_triangles};
 
 use clap::{CommandFactory, FromArgMatches, Parser};
 use rt_core::{Accel, Shape, Triangle};
+use std::path::PathBuf;
 use std::process::ExitCode;
 
 /// A set of rows to compare: the built-in structures and presets, plus any added.
@@ -110,6 +112,14 @@ impl Shootout {
         compare::run(args, &self.entries)
     }
 
+    /// Grades the row `args.grade` names (see [`grade::run`]); returns the Markdown's path.
+    ///
+    /// # Errors
+    /// One line describing bad input.
+    pub fn grade(&self, args: &Args) -> Result<PathBuf, String> {
+        grade::run(args, &self.entries)
+    }
+
     /// Parses `compare`'s flags from the process's arguments (`--help` lists the scenes and
     /// these rows), runs, and returns the exit status `cargo xtask compare` uses: 0 when every
     /// answer agrees, 1 on any mismatch, 2 on bad input (after one `error:` line).
@@ -119,7 +129,26 @@ impl Shootout {
             Ok(cli) => cli,
             Err(e) => e.exit(),
         };
-        exit_code(self.run(&cli.args))
+        self.main_with(&cli.args)
+    }
+
+    /// Runs what `args` asks, a comparison or (with `--grade`) a grade, and returns the exit
+    /// status: 0 when every answer agrees (or the grade is written), 1 on any mismatch, 2 on bad
+    /// input (after one `error:` line).
+    pub fn main_with(&self, args: &Args) -> ExitCode {
+        if args.grade.is_none() {
+            return exit_code(self.run(args));
+        }
+        match self.grade(args) {
+            Ok(path) => {
+                println!("wrote {}", path.display());
+                ExitCode::SUCCESS
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        }
     }
 }
 

@@ -36,6 +36,8 @@ pub trait Traceable: Send + Sync {
     fn trace_timed(&self, rays: &[Ray], query: Query) -> usize;
     /// One ray, for re-checking a disagreement.
     fn answer(&self, ray: &Ray, query: Query) -> Option<Hit>;
+    /// One ray, with the events it caused (for the conformance kit, through [`crate::grade`]).
+    fn answer_counted(&self, ray: &Ray, query: Query) -> (Option<Hit>, Counters);
     /// Every node or cell ([`Accel::regions`]), for `draw`.
     fn regions(&self) -> Vec<Region>;
 }
@@ -101,6 +103,15 @@ impl<A: Accel<Prim = Triangle>> Traceable for Built<A> {
             Query::Closest => self.0.intersect(ray),
             Query::Any => self.0.occluded(ray).then_some(OCCLUDED),
         }
+    }
+
+    fn answer_counted(&self, ray: &Ray, query: Query) -> (Option<Hit>, Counters) {
+        let mut c = Counters::default();
+        let answer = match query {
+            Query::Closest => self.0.intersect_with(ray, &mut c),
+            Query::Any => self.0.occluded_with(ray, &mut c).then_some(OCCLUDED),
+        };
+        (answer, c)
     }
 }
 

@@ -5,8 +5,10 @@ use rt_core::{Aabb, Accel, BuildStats, Hit, Primitive, Ray, Stats, Triangle};
 /// A one-level hierarchy: triangles sorted along x in groups of 16, each group with its box; a
 /// ray tests every group's box, then the triangles of the groups it enters.
 pub struct Groups {
-    tris: Vec<(u32, Triangle)>,
-    boxes: Vec<Aabb>,
+    /// The valid triangles with their input indices, sorted by centroid x.
+    pub tris: Vec<(u32, Triangle)>,
+    /// The box of each group of [`GROUP`] consecutive triangles.
+    pub boxes: Vec<Aabb>,
 }
 
 /// Triangles per group.

@@ -141,6 +141,8 @@ fn default_scene_json_has_every_field_and_no_mismatch() {
             "avg_leaf_prims",
             "prim_refs",
             "duplication",
+            "avg_mailbox_skips",
+            "extra",
         ] {
             assert!(!r[field].is_null(), "{field} missing in {r}");
         }
@@ -148,6 +150,12 @@ fn default_scene_json_has_every_field_and_no_mismatch() {
     }
     // Brute force tests every triangle on every ray.
     assert_eq!(rows[0]["avg_prim_tests"], 82_002.0);
+    // The grid's mailbox skips repeated tests, and only with the mailbox; the grid names its
+    // resolution among its own figures.
+    let row = |name: &str| rows.iter().find(|r| r["structure"] == name).unwrap();
+    assert!(row("grid")["avg_mailbox_skips"].as_f64().unwrap() > 0.0);
+    assert_eq!(row("grid-nomailbox")["avg_mailbox_skips"], 0.0);
+    assert!(row("grid")["extra"]["resolution_x"].as_f64().unwrap() >= 1.0);
 }
 
 #[test]

@@ -115,6 +115,10 @@ pub struct Row {
     pub mismatches: usize,
     pub avg_visits: f64,
     pub avg_prim_tests: f64,
+    /// Primitive tests a mailbox skipped, per ray (0 for structures without one).
+    pub avg_mailbox_skips: f64,
+    /// The structure's own named figures ([`BuildStats::extra`](rt_core::BuildStats::extra)).
+    pub extra: Vec<(&'static str, f64)>,
     pub mrays_per_s: f64,
     pub speedup: f64,
     /// The SAH's expected visits and tests per traced ray (see [`predicted_per_ray`]), for
@@ -527,6 +531,8 @@ fn trace_row(
         mismatches: 0,
         avg_visits: counters.node_visits as f64 / n,
         avg_prim_tests: counters.prim_tests as f64 / n,
+        avg_mailbox_skips: counters.mailbox_skips as f64 / n,
+        extra: stats.extra.clone(),
         mrays_per_s: rays.len() as f64 / best.as_secs_f64().max(1e-9) / 1e6,
         speedup: 0.0,
         predicted: None,
@@ -579,20 +585,28 @@ fn to_table(r: &Report) -> String {
     // The shape of each structure: what the build produced, independent of the rays.
     let _ = writeln!(
         s,
-        "\n{:<w$} {:>9} {:>5} {:>9} {:>7} {:>10} {:>9}",
-        "structure", "nodes", "depth", "leaves", "empty", "prims/leaf", "refs/prim"
+        "\n{:<w$} {:>9} {:>5} {:>9} {:>7} {:>10} {:>9} {:>11}  other figures",
+        "structure", "nodes", "depth", "leaves", "empty", "prims/leaf", "refs/prim", "skips/ray",
     );
     for row in r.rows.iter().filter(|row| row.leaves > 0) {
         let _ = writeln!(
             s,
-            "{:<w$} {:>9} {:>5} {:>9} {:>6.1}% {:>10.2} {:>9.2}",
+            "{:<w$} {:>9} {:>5} {:>9} {:>6.1}% {:>10.2} {:>9.2} {:>11}  {}",
             row.name,
             row.nodes,
             row.max_depth,
             row.leaves,
             100.0 * row.empty_leaves as f64 / row.leaves as f64,
             row.avg_leaf_prims,
-            row.duplication
+            row.duplication,
+            // Mailbox skips: tests a mailbox saved, so `tests/ray` plus this is what the
+            // structure would test without one.
+            three_digits(row.avg_mailbox_skips),
+            row.extra
+                .iter()
+                .map(|(k, v)| format!("{k} {}", three_digits(*v)))
+                .collect::<Vec<_>>()
+                .join(", ")
         );
     }
     // What the SAH predicts for lines spread uniformly over the scene box, beside what these
@@ -676,6 +690,8 @@ fn to_json(r: &Report) -> String {
                 "mismatches": row.mismatches,
                 "avg_visits": row.avg_visits,
                 "avg_prim_tests": row.avg_prim_tests,
+                "avg_mailbox_skips": row.avg_mailbox_skips,
+                "extra": row.extra.iter().map(|(k, v)| ((*k).to_string(), serde_json::json!(v))).collect::<serde_json::Map<_, _>>(),
                 "mrays_per_s": row.mrays_per_s,
                 "speedup": row.speedup,
                 "leaves": row.leaves,

@@ -194,26 +194,23 @@ fn heatmaps(args: &Args, scene: &RenderScene, metric: &str) -> Result<(), String
     if entries.is_empty() {
         return Err("--structures names no structure".into());
     }
-    let shapes = scene.shapes();
-    let mut panels = Vec::new();
+    // Checked first: a row that cannot render is an error here, not a missing panel.
     for entry in &entries {
-        let tracer = shape_builder(entry)?(&shapes);
-        let bar = progress_bar(&format!("{} {}", metric.name(), entry.name));
-        let costs = rt_render::cost_map(
-            scene,
-            tracer.as_ref(),
-            args.width,
-            args.height,
-            metric,
-            &|done, total| {
-                bar.set_length(total as u64);
-                bar.set_position(done as u64);
-            },
-        )
-        .map_err(|e| e.to_string())?;
-        bar.finish_and_clear();
-        panels.push((entry.name.clone(), costs));
+        shape_builder(entry)?;
     }
+    let bar = progress_bar(metric.name());
+    let panels = rt_shootout::report::cost_panels(
+        scene,
+        &entries,
+        (args.width, args.height),
+        metric,
+        &|name, done, total| {
+            bar.set_message(format!("{} {name}", metric.name()));
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        },
+    )?;
+    bar.finish_and_clear();
     let strip = rt_render::heatmap_strip(&panels, metric);
     strip.save_png(&args.out).map_err(|e| e.to_string())?;
     let mut line = format!(

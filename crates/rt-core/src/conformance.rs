@@ -223,15 +223,24 @@ fn scene_summary<P: Primitive>(prims: &[P]) -> String {
 }
 
 /// What the kit's worker thread is doing, for the watchdog: a counter that moves at every
-/// step, and a description of the current one.
+/// step, and the current step. A query stores only its ray (a copy, no allocation); the text is
+/// written only when the watchdog reports.
 #[derive(Default)]
 struct Probe {
     steps: std::sync::atomic::AtomicU64,
-    doing: std::sync::Mutex<String>,
+    doing: std::sync::Mutex<Doing>,
+}
+
+#[derive(Default)]
+enum Doing {
+    #[default]
+    Starting,
+    Phase(&'static str, usize),
+    Tracing(Ray),
 }
 
 impl Probe {
-    fn set(&self, doing: String) {
+    fn set(&self, doing: Doing) {
         if let Ok(mut d) = self.doing.lock() {
             *d = doing;
         }
@@ -239,24 +248,23 @@ impl Probe {
             .fetch_add(1, std::sync::atomic::Ordering::Release);
     }
     fn building(&self, prims: usize) {
-        self.set(format!("building over {prims} primitives"));
+        self.set(Doing::Phase("building over", prims));
     }
     fn checking(&self) {
-        self.set("checking build_stats() and regions()".into());
+        self.set(Doing::Phase("checking build_stats() and regions()", 0));
     }
     fn tracing(&self, ray: &Ray) {
-        self.steps
-            .fetch_add(1, std::sync::atomic::Ordering::Release);
-        if let Ok(mut d) = self.doing.lock() {
-            d.clear();
-            d.push_str("ray ");
-            d.push_str(&ray.to_rust());
-            d.push_str("\n  rays-file line: ");
-            d.push_str(&ray.to_line());
-        }
+        self.set(Doing::Tracing(*ray));
     }
     fn doing(&self) -> String {
-        self.doing.lock().map(|d| d.clone()).unwrap_or_default()
+        match self.doing.lock().as_deref() {
+            Ok(Doing::Starting) | Err(_) => "starting".into(),
+            Ok(Doing::Phase(what, 0)) => (*what).into(),
+            Ok(Doing::Phase(what, n)) => format!("{what} {n} primitives"),
+            Ok(Doing::Tracing(ray)) => {
+                format!("ray {}\n  rays-file line: {}", ray.to_rust(), ray.to_line())
+            }
+        }
     }
 }
 

@@ -3,8 +3,9 @@
 //! heatmap strip of primitive tests per scene.
 
 use crate::compare::{Args, Report, Row};
-use crate::structures;
+use crate::structures::{self, Entry};
 use plotters::prelude::*;
+use rt_render::CostMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
@@ -20,6 +21,35 @@ pub fn prepare(dir: &Path) -> Result<(), String> {
         .map_err(|e| format!("{}: cannot write the report there: {e}", dir.display()))?;
     std::fs::remove_file(&probe).ok();
     Ok(())
+}
+
+/// The cost of every pixel's primary ray on `scene` for each row that can render (built over
+/// the scene's shapes), in order, labelled with the row's name: the panels of a heatmap strip.
+/// `progress` gets the row's name, the tiles done and the total.
+///
+/// # Errors
+/// One line for an unusable image size.
+pub fn cost_panels(
+    scene: &rt_render::RenderScene,
+    rows: &[Entry],
+    (width, height): (u32, u32),
+    metric: rt_render::Metric,
+    progress: &(dyn Fn(&str, usize, usize) + Sync),
+) -> Result<Vec<(String, CostMap)>, String> {
+    let shapes = scene.shapes();
+    let mut panels = Vec::new();
+    for entry in rows {
+        let Some(build) = &entry.build_shapes else {
+            continue;
+        };
+        let tracer = build(&shapes);
+        let costs = rt_render::cost_map(scene, tracer.as_ref(), width, height, metric, &|d, t| {
+            progress(&entry.name, d, t)
+        })
+        .map_err(|e| e.to_string())?;
+        panels.push((entry.name.clone(), costs));
+    }
+    Ok(panels)
 }
 
 /// A name safe in a file name: letters, digits and `-`; a file scene by its file stem.
@@ -40,34 +70,34 @@ fn scene_label(scene: &str) -> String {
 }
 
 /// One figure per structure row, as a chart shows it.
-struct Metric {
+struct Figure {
     file: &'static str,
     title: &'static str,
     value: fn(&Row) -> f64,
 }
 
-const METRICS: [Metric; 5] = [
-    Metric {
+const FIGURES: [Figure; 5] = [
+    Figure {
         file: "mrays.svg",
         title: "million rays per second (higher is better)",
         value: |r| r.mrays_per_s,
     },
-    Metric {
+    Figure {
         file: "tests.svg",
         title: "primitive tests per ray",
         value: |r| r.avg_prim_tests,
     },
-    Metric {
+    Figure {
         file: "visits.svg",
         title: "nodes or cells entered per ray",
         value: |r| r.avg_visits,
     },
-    Metric {
+    Figure {
         file: "memory.svg",
         title: "memory, MiB",
         value: |r| r.memory_bytes as f64 / (1024.0 * 1024.0),
     },
-    Metric {
+    Figure {
         file: "build.svg",
         title: "build time, ms",
         value: |r| r.build_ms,
@@ -98,7 +128,7 @@ fn structure_rows(report: &Report) -> Vec<&Row> {
 }
 
 /// A horizontal bar chart of one metric: a band per structure, a bar per scene, log scale.
-fn bar_chart(path: &Path, metric: &Metric, reports: &[Report]) -> Result<(), String> {
+fn bar_chart(path: &Path, metric: &Figure, reports: &[Report]) -> Result<(), String> {
     let names: Vec<String> = structure_rows(&reports[0])
         .iter()
         .map(|r| r.name.clone())
@@ -278,25 +308,17 @@ fn heatmap(
         (320 * args.height.max(1) / args.width.max(1)).clamp(1, 960),
     );
     let render_scene = rt_render::scene(scene, w, h).map_err(|e| e.to_string())?;
-    let shapes = render_scene.shapes();
-    let mut panels = Vec::new();
-    for name in names {
-        let entry = structures::find(entries, name)?;
-        let Some(build) = &entry.build_shapes else {
-            continue;
-        };
-        let tracer = build(&shapes);
-        let costs = rt_render::cost_map(
-            &render_scene,
-            tracer.as_ref(),
-            w,
-            h,
-            rt_render::Metric::Tests,
-            &|_, _| {},
-        )
-        .map_err(|e| e.to_string())?;
-        panels.push((entry.name, costs));
-    }
+    let rows: Vec<Entry> = names
+        .iter()
+        .map(|n| structures::find(entries, n))
+        .collect::<Result<_, _>>()?;
+    let panels = cost_panels(
+        &render_scene,
+        &rows,
+        (w, h),
+        rt_render::Metric::Tests,
+        &|_, _, _| {},
+    )?;
     let file = format!("heatmap-{}.png", file_key(scene));
     rt_render::heatmap_strip(&panels, rt_render::Metric::Tests)
         .save_png(&dir.join(&file))
@@ -354,7 +376,7 @@ pub fn write(
         reports.first().map_or(0, |r| r.threads),
         args.repeats.max(1)
     );
-    for metric in &METRICS {
+    for metric in &FIGURES {
         bar_chart(&dir.join(metric.file), metric, reports)?;
     }
     model_chart(
@@ -370,7 +392,7 @@ pub fn write(
         |r| r.predicted.map(|p| (p.visits, r.avg_visits)),
     )?;
     md.push_str("## Charts\n\nBrute force is left out of the charts (it is the tables' baseline); scales are logarithmic.\n\n");
-    for metric in &METRICS {
+    for metric in &FIGURES {
         let _ = writeln!(md, "![{}]({})\n", metric.title, metric.file);
     }
     md.push_str(

@@ -5,8 +5,10 @@ use rt_core::{Aabb, Primitive, Region};
 
 impl<P: Primitive> Bvh<P> {
     /// Every node's box, root first, depth first (see [`rt_core::Accel::regions`]). In the
-    /// wide layout the root's box is the union of its children's, and each leaf is a region of
-    /// its own at its parent's depth plus one.
+    /// wide layout the regions are the child boxes a wide node tests (a wide node itself has no
+    /// box; the root's region is the union of its children's), each leaf a region of its own at
+    /// its parent's depth plus one. So the SAH prediction (`rt_core::predicted_cost`) counts box
+    /// entries, while the measured visits of the wide layout count 8-wide nodes and leaves.
     pub(crate) fn walk_regions(&self, visit: &mut dyn FnMut(Region)) {
         match self.layout {
             Layout::Binary => {

@@ -3,11 +3,13 @@
 //! One module per task, as in rust-analyzer's xtask. Tasks:
 //! - `compare`: the structure shootout, with `--report DIR` a Markdown report with charts: the
 //!   `rt-shootout` library, which other crates call with their own structures added.
+//! - `explain`: one ray's walk through one structure, step by step (see [`explain`]).
 //! - `draw`: a slice through a built structure as SVG (see [`draw`]).
 //! - `render`: a Whitted-style picture through any structure, or per-pixel cost heatmaps (see
 //!   [`render`]).
 
 mod draw;
+mod explain;
 mod render;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
@@ -31,6 +33,10 @@ enum Task {
     /// Draw a slice through a built structure at an axis-aligned plane as SVG: its boxes, split
     /// planes or cells there, and the mesh's cross-section.
     Draw(draw::Args),
+    /// Trace one ray through one structure and print its walk step by step: nodes or cells
+    /// entered with their t intervals, split planes and the side taken first, pushes and pops,
+    /// primitives tested and mailbox skips, and the hit, checked against brute force.
+    Explain(explain::Args),
 }
 
 fn main() -> ExitCode {
@@ -49,6 +55,13 @@ fn main() -> ExitCode {
     match cli.task {
         Task::Compare(args) => rt_shootout::Shootout::new().main_with(&args),
         Task::Draw(args) => match draw::run(&args) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        },
+        Task::Explain(args) => match explain::run(&args) {
             Ok(()) => ExitCode::SUCCESS,
             Err(e) => {
                 eprintln!("error: {e}");

@@ -4,14 +4,10 @@ mod common;
 
 use common::assert_one_line_error;
 use rt_core::conformance::shared_meshes_dir;
-use std::process::{Command, Output};
+use std::process::Output;
 
 fn compare(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_xtask"))
-        .arg("compare")
-        .args(args)
-        .output()
-        .expect("xtask runs")
+    common::xtask("compare", args)
 }
 
 fn json(out: &Output) -> serde_json::Value {

@@ -3,14 +3,10 @@
 mod common;
 
 use common::assert_one_line_error;
-use std::process::{Command, Output};
+use std::process::Output;
 
 fn draw(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_xtask"))
-        .arg("draw")
-        .args(args)
-        .output()
-        .expect("xtask runs")
+    common::xtask("draw", args)
 }
 
 #[test]

@@ -6,14 +6,10 @@ mod common;
 use common::assert_one_line_error;
 use rt_core::conformance::shared_meshes_dir;
 use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+use std::process::Output;
 
 fn render(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_xtask"))
-        .arg("render")
-        .args(args)
-        .output()
-        .expect("xtask runs")
+    common::xtask("render", args)
 }
 
 /// A fresh directory for one test's output.

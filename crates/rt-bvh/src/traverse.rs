@@ -5,6 +5,7 @@ use crate::kernels::{self, BoxRay, RayData, Simd};
 use crate::node::{ChildRef, TriPack, WIDTH, WideNode};
 use crate::simd::Stack;
 use crate::{Bvh, MAX_DEPTH};
+use rt_core::trace::{self, Event, Place};
 use rt_core::{Hit, Primitive, Ray, SLAB_FAR_SCALE, Stats, Triangle, TriangleTest};
 use std::ops::Range;
 
@@ -44,6 +45,23 @@ impl<P: Primitive> Bvh<P> {
         loop {
             stats.node_visit();
             let node = &nodes[current];
+            trace::report(stats, || {
+                let (t0, t1) = node
+                    .bounds
+                    .intersect(ray, best.t)
+                    .unwrap_or((f32::NAN, f32::NAN));
+                let i = current as u32;
+                Event::Enter {
+                    place: if node.is_leaf() {
+                        Place::Leaf(i)
+                    } else {
+                        Place::Node(i)
+                    },
+                    t0,
+                    t1,
+                    bounds: Some(node.bounds),
+                }
+            });
             if node.is_leaf() {
                 // PERF: one bounds check per leaf instead of two per primitive: bunny primary rays
                 // 8.76 -> 9.20 Mrays/s single-threaded (`cargo bench -p rt-benches --bench trace`).
@@ -51,7 +69,9 @@ impl<P: Primitive> Bvh<P> {
                 for (prim, &id) in self.prims[range.clone()].iter().zip(&self.ids[range]) {
                     stats.prim_test();
                     if ANY {
-                        if prim.occludes(ray, best.t) {
+                        let blocks = prim.occludes(ray, best.t);
+                        trace::blocked(stats, id, blocks);
+                        if blocks {
                             return Some(Hit {
                                 prim: id,
                                 t: f32::NAN,
@@ -59,7 +79,11 @@ impl<P: Primitive> Bvh<P> {
                                 v: 0.0,
                             });
                         }
-                    } else if let Some(h) = prim.intersect(ray, best.t)
+                        continue;
+                    }
+                    let hit = prim.intersect(ray, best.t);
+                    trace::tested(stats, id, hit.map(|h| h.t));
+                    if let Some(h) = hit
                         && Hit::beats(h.t, id, best.t, best.prim)
                     {
                         best = Hit {
@@ -79,23 +103,43 @@ impl<P: Primitive> Bvh<P> {
                 } else {
                     (b, tb, a, ta)
                 };
+                if S::TRACE {
+                    for (c, t) in [(near, t_near), (far, t_far)] {
+                        if t != f32::INFINITY {
+                            let place = Place::Node(c as u32);
+                            stats.event(Event::Child { place, t });
+                        }
+                    }
+                }
                 if t_near != f32::INFINITY {
                     if t_far != f32::INFINITY {
                         stack[sp] = (far as u32, t_far);
                         sp += 1;
+                        trace::report(stats, || Event::Push {
+                            place: Place::Node(far as u32),
+                            t: t_far,
+                        });
                     }
                     current = near;
                     continue;
                 }
+                trace::report(stats, || Event::Note("the ray enters neither child's box"));
             }
             // Pop the next subtree that can still hold a hit no farther than the best so far.
             loop {
                 if sp == 0 {
+                    trace::report(stats, || Event::Note("stack empty: done"));
                     return (best.prim != u32::MAX).then_some(best);
                 }
                 sp -= 1;
                 let (index, t_entry) = stack[sp];
-                if t_entry <= best.t * SLAB_FAR_SCALE {
+                let skipped = t_entry > best.t * SLAB_FAR_SCALE;
+                trace::report(stats, || Event::Pop {
+                    place: Place::Node(index),
+                    t: t_entry,
+                    skipped,
+                });
+                if !skipped {
                     current = index as usize;
                     break;
                 }
@@ -150,6 +194,17 @@ impl<const MT: bool> Leaves for Packs<'_, MT> {
             } else {
                 kernels::watertight4(simd, pack, r, best.t)
             };
+            if S::TRACE {
+                let t = simd.store4(h.t);
+                for (lane, &id) in pack.ids[..pack.len()].iter().enumerate() {
+                    let hit = (h.mask & 1 << lane != 0).then_some(t[lane]);
+                    if ANY {
+                        trace::blocked(stats, id, hit.is_some());
+                    } else {
+                        trace::tested(stats, id, hit);
+                    }
+                }
+            }
             if ANY && h.mask != 0 {
                 return true;
             }
@@ -200,6 +255,11 @@ impl Leaves for ScalarPacks<'_> {
                         rt_core::moller_trumbore_edges(row(0), row(1), row(2), ray, best.t)
                     }
                 };
+                if ANY {
+                    trace::blocked(stats, pack.ids[lane], hit.is_some());
+                } else {
+                    trace::tested(stats, pack.ids[lane], hit.map(|p| p.t));
+                }
                 if let Some(p) = hit {
                     if ANY {
                         return true;
@@ -232,14 +292,29 @@ impl<P: Primitive> Leaves for Prims<'_, P> {
         for (prim, &id) in self.prims[items.clone()].iter().zip(&self.ids[items]) {
             stats.prim_test();
             if ANY {
-                if prim.occludes(ray, best.t) {
+                let blocks = prim.occludes(ray, best.t);
+                trace::blocked(stats, id, blocks);
+                if blocks {
                     return true;
                 }
-            } else if let Some(h) = prim.intersect(ray, best.t) {
-                consider(best, id, h.t, h.u, h.v);
+            } else {
+                let hit = prim.intersect(ray, best.t);
+                trace::tested(stats, id, hit.map(|h| h.t));
+                if let Some(h) = hit {
+                    consider(best, id, h.t, h.u, h.v);
+                }
             }
         }
         false
+    }
+}
+
+/// How a trace names a child of the wide tree: a node by its index, a leaf by its first item.
+fn place(c: ChildRef) -> Place {
+    if c.is_leaf() {
+        Place::Leaf(c.items().start as u32)
+    } else {
+        Place::Node(c.index() as u32)
     }
 }
 
@@ -275,6 +350,15 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool, const SORT: bo
     let boxes = BoxRay::new(simd, ray);
     if kernels::slab8(simd, &nodes[0], &boxes, ray.t_max).0 == 0 {
         stats.node_visit();
+        trace::report(stats, || Event::Enter {
+            place: Place::Node(0),
+            t0: ray.t_min,
+            t1: f32::INFINITY,
+            bounds: None,
+        });
+        trace::report(stats, || {
+            Event::Note("the ray misses every child box of the root")
+        });
         return None;
     }
     let r = RayData::new(simd, ray, boxes);
@@ -286,11 +370,33 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool, const SORT: bo
     };
     let mut stack = Stack::<(u32, f32), WIDE_STACK>::new();
     let mut current = ChildRef::node(0);
+    // Only the trace reads the entry distance of the node being visited.
+    let mut t_current = ray.t_min;
     loop {
         stats.node_visit();
+        trace::report(stats, || Event::Enter {
+            place: place(current),
+            t0: t_current,
+            t1: f32::INFINITY,
+            bounds: None,
+        });
         if !current.is_leaf() {
             let node = &nodes[current.index()];
             let (mask, t_entry) = kernels::slab8(simd, node, &r.boxes, best.t);
+            let t_children = if S::TRACE {
+                simd.store8(t_entry)
+            } else {
+                [0.0; 8]
+            };
+            if S::TRACE {
+                let mut m = mask;
+                while m != 0 {
+                    let i = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    let (place, t) = (place(node.child(i)), t_children[i]);
+                    stats.event(Event::Child { place, t });
+                }
+            }
             if mask != 0 {
                 if ANY {
                     let mut m = mask;
@@ -298,9 +404,14 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool, const SORT: bo
                         let i = m.trailing_zeros() as usize;
                         m &= m - 1;
                         stack.push((node.children[i], 0.0));
+                        trace::report(stats, || Event::Push {
+                            place: place(node.child(i)),
+                            t: t_children[i],
+                        });
                     }
                 } else if mask & (mask - 1) == 0 {
-                    current = node.child(mask.trailing_zeros() as usize);
+                    let i = mask.trailing_zeros() as usize;
+                    (current, t_current) = (node.child(i), t_children[i]);
                     continue;
                 } else if !SORT {
                     // Unsorted (only to measure what sorting gains): the first child entered
@@ -313,7 +424,7 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool, const SORT: bo
                         m &= m - 1;
                         stack.push((node.children[i], t_entry[i]));
                     }
-                    current = node.child(first);
+                    (current, t_current) = (node.child(first), t_entry[first]);
                     continue;
                 } else {
                     // Insertion sort of the entered children, farthest first.
@@ -335,8 +446,12 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool, const SORT: bo
                     }
                     for &h in &hits[..n - 1] {
                         stack.push(h);
+                        trace::report(stats, || Event::Push {
+                            place: place(ChildRef(h.0)),
+                            t: h.1,
+                        });
                     }
-                    current = ChildRef(hits[n - 1].0);
+                    (current, t_current) = (ChildRef(hits[n - 1].0), hits[n - 1].1);
                     continue;
                 }
             }
@@ -346,10 +461,17 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool, const SORT: bo
         // Pop the next subtree that can still hold a hit no farther than the best so far.
         loop {
             let Some((child, t)) = stack.pop() else {
+                trace::report(stats, || Event::Note("stack empty: done"));
                 return (!ANY && best.prim != u32::MAX).then_some(best);
             };
-            if ANY || t <= best.t * SLAB_FAR_SCALE {
-                current = ChildRef(child);
+            let skipped = !ANY && t > best.t * SLAB_FAR_SCALE;
+            trace::report(stats, || Event::Pop {
+                place: place(ChildRef(child)),
+                t,
+                skipped,
+            });
+            if !skipped {
+                (current, t_current) = (ChildRef(child), t);
                 break;
             }
         }

@@ -39,7 +39,9 @@ impl<P: Primitive> Accel for BruteForce<P> {
         let mut t_max = ray.t_max;
         for (p, &id) in self.prims.iter().zip(&self.ids) {
             stats.prim_test();
-            if let Some(h) = p.intersect(ray, t_max) {
+            let hit = p.intersect(ray, t_max);
+            crate::trace::tested(stats, id, hit.map(|h| h.t));
+            if let Some(h) = hit {
                 // Ids increase along the array, so an equal t never replaces an earlier hit.
                 if best.is_none_or(|b| h.t < b.t) {
                     best = Some(Hit {
@@ -59,9 +61,11 @@ impl<P: Primitive> Accel for BruteForce<P> {
         if !ray.is_valid() {
             return false;
         }
-        self.prims.iter().any(|p| {
+        self.prims.iter().zip(&self.ids).any(|(p, &id)| {
             stats.prim_test();
-            p.occludes(ray, ray.t_max)
+            let blocks = p.occludes(ray, ray.t_max);
+            crate::trace::blocked(stats, id, blocks);
+            blocks
         })
     }
 

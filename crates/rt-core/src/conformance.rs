@@ -25,6 +25,7 @@
 //! a query that does not return within [`STALL_LIMIT`], or that panics, fails the case with the
 //! ray it was on (see [`check_case`]).
 
+use crate::trace::{Event, Outcome, Trace};
 use crate::{Accel, BruteForce, Counters, Hit, Primitive, Ray, Rng, Sphere, Triangle};
 use glam::Vec3;
 use proptest::prelude::*;
@@ -123,7 +124,8 @@ fn compare_rays_probed<A: Accel>(
                 detail: Box::default(),
             });
         }
-        let counted = accel.intersect_with(ray, &mut Counters::default());
+        let mut counters = Counters::default();
+        let counted = accel.intersect_with(ray, &mut counters);
         if !Hit::agree(got, counted) {
             return Err(Mismatch {
                 query: "intersect_with(Counters)",
@@ -131,6 +133,17 @@ fn compare_rays_probed<A: Accel>(
                 expected: got,
                 got: counted,
                 detail: Box::default(),
+            });
+        }
+        let mut trace = Trace::default();
+        let traced = accel.intersect_with(ray, &mut trace);
+        if let Err(why) = trace_agrees(&trace, counters, traced) {
+            return Err(Mismatch {
+                query: "intersect_with(Trace)",
+                ray: *ray,
+                expected: got,
+                got: traced,
+                detail: why.into(),
             });
         }
         let occluded = accel.occluded(ray);
@@ -150,6 +163,50 @@ fn compare_rays_probed<A: Accel>(
                 got: as_hit(occluded),
                 detail: Box::default(),
             });
+        }
+    }
+    Ok(())
+}
+
+/// Whether a traced walk matches the counted one: the same answer and counts and, if the
+/// structure reports events at all, one `Enter` per node visit, one `Test` per primitive test,
+/// one `Skip` per mailbox skip, and a `Test` that found the answer's primitive at its `t`.
+fn trace_agrees(trace: &Trace, counters: Counters, traced: Option<Hit>) -> Result<(), String> {
+    if trace.counters != counters {
+        return Err(format!(
+            "a traced walk counted {:?}, an untraced one {counters:?}",
+            trace.counters
+        ));
+    }
+    if trace.events.is_empty() {
+        return Ok(());
+    }
+    let count = |f: fn(&Event) -> bool| trace.events.iter().filter(|e| f(e)).count() as u64;
+    let enters = count(|e| matches!(e, Event::Enter { .. }));
+    let tests = count(|e| matches!(e, Event::Test { .. }));
+    let skips = count(|e| matches!(e, Event::Skip { .. }));
+    if (enters, tests, skips)
+        != (
+            counters.node_visits,
+            counters.prim_tests,
+            counters.mailbox_skips,
+        )
+    {
+        return Err(format!(
+            "the trace reports {enters} enters, {tests} tests and {skips} mailbox skips; the \
+             counters {counters:?}"
+        ));
+    }
+    if let Some(hit) = traced {
+        let found = trace.events.iter().any(|e| {
+            matches!(*e, Event::Test { prim, outcome: Outcome::Hit(t) }
+                if prim == hit.prim && t == hit.t)
+        });
+        if !found {
+            return Err(format!(
+                "no traced test of primitive {} found its hit at t = {}",
+                hit.prim, hit.t
+            ));
         }
     }
     Ok(())

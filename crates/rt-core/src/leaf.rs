@@ -4,6 +4,7 @@
 //! this loop, with a per-ray [`Mailbox`] to test each primitive once; the BVH, whose leaves own
 //! their primitives, needs no mailbox.
 
+use crate::trace::{self, Event};
 use crate::{Hit, Mailbox, Primitive, Ray, Stats};
 
 /// The "no hit yet" record of a ray whose interval ends at `t_max`.
@@ -34,16 +35,23 @@ pub fn test_primitives<P: Primitive, S: Stats, const ANY: bool, const N: usize>(
     for &id in ids {
         if use_mailbox && mailbox.check_and_insert(id) {
             stats.mailbox_skip();
+            trace::report(stats, || Event::Skip { prim: id });
             continue;
         }
         stats.prim_test();
         let prim = &prims[id as usize];
         if ANY {
-            if prim.occludes(ray, best.t) {
+            let blocks = prim.occludes(ray, best.t);
+            trace::blocked(stats, id, blocks);
+            if blocks {
                 best.prim = id;
                 return true;
             }
-        } else if let Some(h) = prim.intersect(ray, best.t)
+            continue;
+        }
+        let hit = prim.intersect(ray, best.t);
+        trace::tested(stats, id, hit.map(|h| h.t));
+        if let Some(h) = hit
             && Hit::beats(h.t, id, best.t, best.prim)
         {
             *best = Hit {

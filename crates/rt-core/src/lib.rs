@@ -48,6 +48,7 @@ mod shape;
 mod sphere;
 mod stats;
 mod surface;
+pub mod trace;
 mod triangle;
 
 #[cfg(feature = "conformance")]
@@ -68,6 +69,7 @@ pub use shape::Shape;
 pub use sphere::Sphere;
 pub use stats::{Counters, NoStats, Stats};
 pub use surface::{OFFSET_ULPS, SurfacePoint, error_bound, offset_origin};
+pub use trace::{Event, Outcome, Place, Take, Trace};
 pub use triangle::{MtTriangle, Shear, Triangle, moller_trumbore_edges};
 
 /// Re-exported so users name the same `Vec3` the library uses.

@@ -6,7 +6,16 @@
 //! as fast as a traversal written with no counters at all.
 
 /// Receives traversal events. Implement it to collect your own statistics.
+///
+/// The three counting calls are made by every traversal. A sink that sets [`Stats::TRACE`]
+/// also receives, through [`Stats::event`], each step with its context (the node or cell
+/// entered and its interval, split planes and the side taken, pushes and pops, each test's
+/// outcome): what [`Trace`](crate::Trace) records to explain one ray.
 pub trait Stats {
+    /// Whether this sink wants [`Stats::event`] calls. Traversals report events only under
+    /// `if S::TRACE`, so a sink that leaves it `false` pays nothing for them.
+    const TRACE: bool = false;
+
     /// A node (or cell) was entered.
     fn node_visit(&mut self);
     /// A primitive was intersected.
@@ -14,6 +23,11 @@ pub trait Stats {
     /// A primitive test was skipped because a mailbox showed the primitive was already tested.
     #[inline(always)]
     fn mailbox_skip(&mut self) {}
+    /// One step of the walk, with its context; called only when [`Stats::TRACE`] is true.
+    #[inline(always)]
+    fn event(&mut self, event: crate::trace::Event) {
+        let _ = event;
+    }
 }
 
 /// The sink that records nothing and compiles away.

@@ -8,6 +8,7 @@
 
 use crate::Grid;
 use crate::dda::{Dda, RayAxes};
+use rt_core::trace::{self, Event, Place};
 use rt_core::{Hit, Mailbox, Primitive, Ray, SLAB_FAR_SCALE, Stats, leaf};
 
 /// Mailbox slots per ray: the last this many primitives tested are not tested again.
@@ -51,24 +52,47 @@ impl<P: Primitive> Grid<P> {
         let mut dda = Dda::start(shape, &r, t0);
         let mut best = leaf::no_hit(ray.t_max);
         let mut mailbox = Mailbox::new();
+        // Only the trace reads where the ray enters the current cell.
+        let mut t_enter = t0;
+        let enter = |cell: [u32; 3], t0: f32, t1: f32| Event::Enter {
+            place: Place::Cell { grid: 0, cell },
+            t0,
+            t1,
+            bounds: Some(shape.cell_box(cell)),
+        };
         loop {
             stats.node_visit();
+            trace::report(stats, || enter(dda.cell, t_enter, dda.exit().1.min(t1)));
             if self.test_cell::<S, ANY>(dda.cell, ray, &mut best, &mut mailbox, stats) {
+                trace::report(stats, || Event::Note("a primitive blocks the ray: done"));
                 break;
             }
             let (a, t_exit) = dda.exit();
             if t_exit > best.t * SLAB_FAR_SCALE || t_exit > t1 {
+                trace::report(stats, || {
+                    Event::Note(if t_exit > t1 {
+                        "the ray leaves the grid: done"
+                    } else {
+                        "the next cell starts beyond the best hit: done"
+                    })
+                });
                 break;
             }
             for c in dda.side_cells(shape, &r, a) {
                 stats.node_visit();
+                trace::report(stats, || {
+                    Event::Note("two planes crossed within rounding: the cell beside the path too")
+                });
+                trace::report(stats, || enter(c, t_exit, t_exit));
                 if self.test_cell::<S, ANY>(c, ray, &mut best, &mut mailbox, stats) {
                     return leaf::answer::<ANY>(best);
                 }
             }
             if !dda.step(shape, &r, a) {
+                trace::report(stats, || Event::Note("the ray leaves the grid: done"));
                 break;
             }
+            t_enter = t_exit;
         }
         leaf::answer::<ANY>(best)
     }

@@ -10,6 +10,7 @@
 
 use crate::HGrid;
 use crate::builder::MAX_LEVELS;
+use rt_core::trace::{self, Event, Place};
 use rt_core::{Hit, Mailbox, Primitive, Ray, SLAB_FAR_SCALE, Stats, leaf};
 use rt_grid::dda::{Dda, RayAxes};
 
@@ -62,11 +63,24 @@ impl<P: Primitive> HGrid<P> {
         loop {
             let w = stack[sp - 1];
             let level = &self.levels[w.level as usize];
+            let enter = |cell: [u32; 3], t0: f32, t1: f32| Event::Enter {
+                place: Place::Cell {
+                    grid: w.level,
+                    cell,
+                },
+                t0,
+                t1,
+                bounds: Some(level.shape.cell_box(cell)),
+            };
             if !w.visited {
                 stack[sp - 1].visited = true;
                 stats.node_visit();
+                trace::report(stats, || {
+                    enter(w.dda.cell, w.t_enter, w.dda.exit().1.min(t1))
+                });
                 let cell = self.cells[level.first_cell + level.shape.index(w.dda.cell)];
                 if let Some(nested) = cell.nested() {
+                    trace::report(stats, || Event::Note("refined by a nested grid: walk it"));
                     let shape = &self.levels[nested].shape;
                     stack[sp] = Walk {
                         level: nested as u32,
@@ -78,15 +92,27 @@ impl<P: Primitive> HGrid<P> {
                     continue;
                 }
                 if test(&self.refs[cell.references()], &mut best, stats) {
+                    trace::report(stats, || Event::Note("a primitive blocks the ray: done"));
                     break;
                 }
             }
             let (a, t_exit) = w.dda.exit();
             if t_exit > best.t * SLAB_FAR_SCALE || t_exit > t1 {
+                trace::report(stats, || {
+                    Event::Note(if t_exit > t1 {
+                        "the ray leaves the top grid: done"
+                    } else {
+                        "the next cell starts beyond the best hit: done"
+                    })
+                });
                 break;
             }
             for c in w.dda.side_cells(&level.shape, &r, a) {
                 stats.node_visit();
+                trace::report(stats, || {
+                    Event::Note("two planes crossed within rounding: the cell beside the path too")
+                });
+                trace::report(stats, || enter(c, t_exit, t_exit));
                 let cell = self.cells[level.first_cell + level.shape.index(c)];
                 let ids = match cell.nested() {
                     Some(nested) => {
@@ -105,6 +131,13 @@ impl<P: Primitive> HGrid<P> {
                 w.visited = false;
             } else {
                 sp -= 1;
+                trace::report(stats, || {
+                    Event::Note(if sp == 0 {
+                        "the ray leaves the top grid: done"
+                    } else {
+                        "the ray leaves the nested grid: back to the grid above"
+                    })
+                });
                 if sp == 0 {
                     break;
                 }

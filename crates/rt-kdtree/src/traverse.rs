@@ -14,6 +14,7 @@
 //! found.
 
 use crate::{KdTree, MAX_DEPTH, Node};
+use rt_core::trace::{self, Event, Place, Take};
 use rt_core::{Hit, Mailbox, Primitive, Ray, SLAB_FAR_SCALE, Stats, leaf};
 
 /// Mailbox slots per ray: the last this many primitives tested are not tested again.
@@ -72,6 +73,36 @@ impl RayAxes {
         } else {
             Step::Both { near, far, t }
         }
+    }
+
+    /// The trace's account of `step` taken at interior node `node`.
+    fn split_event(&self, node: &Node, step: &Step) -> Event {
+        let (a, first) = (node.axis(), node.index());
+        // `Near` and `Far` name one child; the other is its sibling.
+        let other = |c: usize| if c == first { first + 1 } else { first };
+        let (near, far, take) = match *step {
+            Step::Near(c) => (c, other(c), Take::Near),
+            Step::Far(c) => (other(c), c, Take::Far),
+            Step::Both { near, far, .. } => (near, far, Take::Both),
+            Step::InPlane { near, far } => (near, far, Take::InPlane),
+        };
+        Event::Split {
+            axis: a,
+            pos: node.split(),
+            t: (node.split() - self.o[a]) * self.inv[a],
+            near: Place::Node(near as u32),
+            far: Place::Node(far as u32),
+            take,
+        }
+    }
+}
+
+/// How a trace names node `i`.
+fn place(nodes: &[Node], i: usize) -> Place {
+    if nodes[i].is_leaf() {
+        Place::Leaf(i as u32)
+    } else {
+        Place::Node(i as u32)
     }
 }
 
@@ -144,18 +175,34 @@ impl<P: Primitive> KdTree<P> {
         loop {
             stats.node_visit();
             let node = &nodes[current];
+            trace::report(stats, || Event::Enter {
+                place: place(nodes, current),
+                t0,
+                t1,
+                bounds: None,
+            });
             if !node.is_leaf() {
-                current = match r.step(node, t0, t1) {
+                let step = r.step(node, t0, t1);
+                trace::report(stats, || r.split_event(node, &step));
+                current = match step {
                     Step::Near(c) | Step::Far(c) => c,
                     Step::Both { near, far, t } => {
                         stack[sp] = (far as u32, t.max(t0), t1);
                         sp += 1;
+                        trace::report(stats, || Event::Push {
+                            place: place(nodes, far),
+                            t: t.max(t0),
+                        });
                         t1 = t.min(t1);
                         near
                     }
                     Step::InPlane { near, far } => {
                         stack[sp] = (far as u32, t0, t1);
                         sp += 1;
+                        trace::report(stats, || Event::Push {
+                            place: place(nodes, far),
+                            t: t0,
+                        });
                         near
                     }
                 };
@@ -166,11 +213,18 @@ impl<P: Primitive> KdTree<P> {
             }
             loop {
                 if sp == 0 {
+                    trace::report(stats, || Event::Note("stack empty: done"));
                     return false;
                 }
                 sp -= 1;
                 let (index, a0, a1) = stack[sp];
-                if a0 <= best.t * SLAB_FAR_SCALE {
+                let skipped = a0 > best.t * SLAB_FAR_SCALE;
+                trace::report(stats, || Event::Pop {
+                    place: place(nodes, index as usize),
+                    t: a0,
+                    skipped,
+                });
+                if !skipped {
                     (current, t0, t1) = (index as usize, a0, a1);
                     break;
                 }
@@ -210,13 +264,26 @@ impl<P: Primitive> KdTree<P> {
             loop {
                 stats.node_visit();
                 let node = &nodes[current];
+                trace::report(stats, || Event::Enter {
+                    place: place(nodes, current),
+                    t0,
+                    t1,
+                    bounds: None,
+                });
                 if node.is_leaf() {
                     break;
                 }
-                let next = match r.step(node, t0, t1) {
+                let step = r.step(node, t0, t1);
+                trace::report(stats, || r.split_event(node, &step));
+                let next = match step {
                     Step::Near(c) => c,
                     Step::Far(c) => c,
-                    Step::Both { far, .. } if current == exit_node => far,
+                    Step::Both { far, .. } if current == exit_node => {
+                        trace::report(stats, || {
+                            Event::Note("the last leaf's exit plane: its far side")
+                        });
+                        far
+                    }
                     // A plane within rounding of either end of the interval means a leaf
                     // touched at one point: the near one at a restart, or the far one, which the
                     // next restart would skip.
@@ -231,6 +298,9 @@ impl<P: Primitive> KdTree<P> {
                         near
                     }
                     Step::Both { .. } | Step::InPlane { .. } => {
+                        trace::report(stats, || {
+                            Event::Note("a plane at the interval's end: finish with the stack walk")
+                        });
                         self.stack_walk::<S, ANY>(ray, t0, t_end, &mut best, stats);
                         return leaf::answer::<ANY>(best);
                     }
@@ -249,6 +319,9 @@ impl<P: Primitive> KdTree<P> {
             t0 = t1;
             exit_node = leaf_exit;
             restarted = true;
+            trace::report(stats, || {
+                Event::Note("no hit in this leaf: restart from the top node")
+            });
         }
     }
 }

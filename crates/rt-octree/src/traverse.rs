@@ -40,7 +40,8 @@ use crate::Octree;
 use crate::builder::MAX_DEPTH;
 use crate::node::{Block, Node};
 use rt_core::glam::{BVec3A, Vec3A};
-use rt_core::{Hit, Mailbox, NEAR_TIE, Primitive, Ray, SLAB_FAR_SCALE, Stats, leaf};
+use rt_core::trace::{self, Event, Place};
+use rt_core::{Aabb, Hit, Mailbox, NEAR_TIE, Primitive, Ray, SLAB_FAR_SCALE, Stats, leaf};
 
 /// Mailbox slots per ray: the last this many primitives tested are not tested again.
 pub(crate) const MAILBOX: usize = 8;
@@ -225,6 +226,54 @@ fn children_order(
     (order, count)
 }
 
+/// How a trace names child `i` of block `block`: the root is node 0, and the children of
+/// block `b` are numbered from `1 + 8b`.
+fn place(node: &Node, block: u32, i: u32) -> Place {
+    let id = 1 + 8 * block + i;
+    if node.children().is_some() {
+        Place::Node(id)
+    } else {
+        Place::Leaf(id)
+    }
+}
+
+/// The trace's report of entering a node with box `[lo, hi]` and face parameters `slabs`.
+fn enter(place: Place, lo: Vec3A, hi: Vec3A, slabs: (Vec3A, Vec3A)) -> Event {
+    Event::Enter {
+        place,
+        t0: slabs.0.max_element(),
+        t1: slabs.1.min_element(),
+        bounds: Some(Aabb {
+            min: lo.into(),
+            max: hi.into(),
+        }),
+    }
+}
+
+/// Reports, in the order the walk will take them, the children of block `b` (of the node with
+/// box `[lo, hi]`) that the ray crosses, with their entry parameters.
+fn report_children<S: Stats>(
+    stats: &mut S,
+    r: &RayAxes,
+    (lo, hi): (Vec3A, Vec3A),
+    (b, block): (u32, &Block),
+    (mut order, left): (u32, u32),
+) {
+    if !S::TRACE {
+        return;
+    }
+    let mid = lo * 0.5 + hi * 0.5;
+    for _ in 0..left {
+        let i = order & 7;
+        order >>= 4;
+        let upper = lanes(i);
+        let (clo, chi) = (Vec3A::select(upper, mid, lo), Vec3A::select(upper, hi, mid));
+        let t = r.slabs(clo, chi).0.max_element();
+        let place = place(&block.0[i as usize], b, i);
+        stats.event(Event::Child { place, t });
+    }
+}
+
 impl<P: Primitive> Octree<P> {
     /// The walk. `ANY = false` finds the closest hit; `ANY = true` returns at the first.
     #[inline(always)]
@@ -260,11 +309,20 @@ impl<P: Primitive> Octree<P> {
             )
         };
         stats.node_visit();
+        trace::report(stats, || {
+            let place = match self.root.children() {
+                Some(_) => Place::Node(0),
+                None => Place::Leaf(0),
+            };
+            enter(place, lo, hi, slabs)
+        });
         let Some(block) = self.root.children() else {
             test(&self.root, &mut best, stats);
             return leaf::answer::<ANY>(best);
         };
         let (order, left) = children_order(&r, lo, hi, slabs, &self.blocks[block], t_from);
+        let b = (block as u32, &self.blocks[block]);
+        report_children(stats, &r, (lo, hi), b, (order, left));
         let frame = Frame {
             lo,
             hi,
@@ -291,18 +349,25 @@ impl<P: Primitive> Octree<P> {
             let node = self.blocks[f.block as usize].0[i as usize];
             let slabs = r.slabs(lo, hi);
             if slabs.0.max_element() > best.t * SLAB_FAR_SCALE {
+                trace::report(stats, || {
+                    Event::Note("the next child starts beyond the best hit: done")
+                });
                 break;
             }
             stats.node_visit();
+            trace::report(stats, || enter(place(&node, f.block, i), lo, hi, slabs));
             match node.children() {
                 None => {
                     if test(&node, &mut best, stats) {
+                        trace::report(stats, || Event::Note("a primitive blocks the ray: done"));
                         break;
                     }
                 }
                 Some(block) => {
                     let (order, left) =
                         children_order(&r, lo, hi, slabs, &self.blocks[block], t_from);
+                    let b = (block as u32, &self.blocks[block]);
+                    report_children(stats, &r, (lo, hi), b, (order, left));
                     stack[sp] = Frame {
                         lo,
                         hi,

@@ -29,6 +29,28 @@ impl std::fmt::Debug for Row {
     }
 }
 
+/// Asks the row, traced when the sink traces (so the kit's checks of the trace see the row's
+/// events), and replays what it reported into `stats`.
+fn ask<S: Stats>(
+    row: &dyn Traceable,
+    ray: &rt_core::Ray,
+    query: Query,
+    stats: &mut S,
+) -> Option<Hit> {
+    if S::TRACE {
+        let (hit, trace) = row.trace(ray, query);
+        replay(trace.counters, stats);
+        for e in trace.events {
+            stats.event(e);
+        }
+        hit
+    } else {
+        let (hit, c) = row.answer_counted(ray, query);
+        replay(c, stats);
+        hit
+    }
+}
+
 fn replay<S: Stats>(c: rt_core::Counters, stats: &mut S) {
     for _ in 0..c.node_visits {
         stats.node_visit();
@@ -56,14 +78,10 @@ impl Accel for Row {
         Row(build(prims))
     }
     fn intersect_with<S: Stats>(&self, ray: &rt_core::Ray, stats: &mut S) -> Option<Hit> {
-        let (hit, c) = self.0.answer_counted(ray, Query::Closest);
-        replay(c, stats);
-        hit
+        ask(self.0.as_ref(), ray, Query::Closest, stats)
     }
     fn occluded_with<S: Stats>(&self, ray: &rt_core::Ray, stats: &mut S) -> bool {
-        let (hit, c) = self.0.answer_counted(ray, Query::Any);
-        replay(c, stats);
-        hit.is_some()
+        ask(self.0.as_ref(), ray, Query::Any, stats).is_some()
     }
     fn memory_bytes(&self) -> usize {
         self.0.memory_bytes()

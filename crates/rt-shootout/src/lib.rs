@@ -24,6 +24,7 @@
 //! The crate needs `rt-core` and `rt-shootout` as dependencies (see the workspace README).
 
 pub mod compare;
+pub mod explain;
 pub mod grade;
 pub mod report;
 pub mod structures;

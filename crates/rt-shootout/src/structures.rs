@@ -6,7 +6,9 @@
 
 use rayon::prelude::*;
 use rt_bvh::Bvh;
-use rt_core::{Accel, BruteForce, BuildStats, Counters, Hit, Ray, Region, Shape, Triangle};
+use rt_core::{
+    Accel, BruteForce, BuildStats, Counters, Hit, Ray, Region, Shape, Stats, Trace, Triangle,
+};
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
 use rt_kdtree::KdTree;
@@ -38,6 +40,8 @@ pub trait Traceable: Send + Sync {
     fn answer(&self, ray: &Ray, query: Query) -> Option<Hit>;
     /// One ray, with the events it caused (for the conformance kit, through [`crate::grade`]).
     fn answer_counted(&self, ray: &Ray, query: Query) -> (Option<Hit>, Counters);
+    /// One ray with every step of its walk recorded (for `explain`).
+    fn trace(&self, ray: &Ray, query: Query) -> (Option<Hit>, Trace);
     /// Every node or cell ([`Accel::regions`]), for `draw`.
     fn regions(&self) -> Vec<Region>;
 }
@@ -51,6 +55,18 @@ const OCCLUDED: Hit = Hit {
     u: 0.0,
     v: 0.0,
 };
+
+impl<A: Accel<Prim = Triangle>> Built<A> {
+    /// One query with a fresh sink of type `S`, and the sink.
+    fn ask<S: Stats + Default>(&self, ray: &Ray, query: Query) -> (Option<Hit>, S) {
+        let mut stats = S::default();
+        let answer = match query {
+            Query::Closest => self.0.intersect_with(ray, &mut stats),
+            Query::Any => self.0.occluded_with(ray, &mut stats).then_some(OCCLUDED),
+        };
+        (answer, stats)
+    }
+}
 
 impl<A: Accel<Prim = Triangle>> Traceable for Built<A> {
     fn memory_bytes(&self) -> usize {
@@ -106,12 +122,11 @@ impl<A: Accel<Prim = Triangle>> Traceable for Built<A> {
     }
 
     fn answer_counted(&self, ray: &Ray, query: Query) -> (Option<Hit>, Counters) {
-        let mut c = Counters::default();
-        let answer = match query {
-            Query::Closest => self.0.intersect_with(ray, &mut c),
-            Query::Any => self.0.occluded_with(ray, &mut c).then_some(OCCLUDED),
-        };
-        (answer, c)
+        self.ask(ray, query)
+    }
+
+    fn trace(&self, ray: &Ray, query: Query) -> (Option<Hit>, Trace) {
+        self.ask(ray, query)
     }
 }
 

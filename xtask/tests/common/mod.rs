@@ -1,6 +1,6 @@
 //! Helpers shared by the CLI tests.
 
-use std::process::Output;
+use std::process::{Command, Output};
 
 /// Bad input: exit status 2, exactly one line on stderr that starts with `error: ` and contains
 /// `needle`, and nothing on stdout.
@@ -13,4 +13,13 @@ pub fn assert_one_line_error(out: &Output, needle: &str) {
         "stderr: {err}"
     );
     assert!(out.stdout.is_empty());
+}
+
+/// Runs `cargo xtask TASK ARGS...` (the binary this package builds) and collects its output.
+pub fn xtask(task: &str, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .arg(task)
+        .args(args)
+        .output()
+        .expect("xtask runs")
 }

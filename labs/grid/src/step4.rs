@@ -1,0 +1,33 @@
+//! Step 4: the closest hit, and when the walk may stop.
+//!
+//! Test the triangles of each cell the walk visits, keeping the best hit by the tie rule
+//! ([`Hit::beats`]: smaller `t`, then smaller index). The trap: a triangle spanning several
+//! cells can be hit *beyond* the current cell while a closer triangle waits in the next cell.
+//! So a hit ends the walk only if it lies inside the cell just tested (`t ≤ t_exit`);
+//! otherwise keep it as the best so far and walk on.
+//!
+//! Rays outside the trait's precondition ([`Ray::is_valid`] false: NaN, infinite, zero
+//! direction) must return `None` at once, visiting nothing.
+
+use crate::{LabGrid, step1, step3, step6};
+use rt_core::{Hit, Primitive, Ray, Stats};
+
+/// Tests the triangles of `cell` against the ray up to `best.t`, updating `best`. With `any`,
+/// returns `true` at the first hit instead. Each test is reported to `stats`; with mailboxes
+/// on, a triangle this ray tested before is skipped (step 6) and reported as a mailbox skip.
+pub fn test_cell<S: Stats>(
+    grid: &LabGrid,
+    cell: [u32; 3],
+    ray: &Ray,
+    best: &mut Hit,
+    mailbox: &mut step6::RayMailbox,
+    any: bool,
+    stats: &mut S,
+) -> bool {
+    todo!("step 4: testing one cell")
+}
+
+/// The closest hit along the ray (ties to the smaller index), or `None`.
+pub fn closest_hit<S: Stats>(grid: &LabGrid, ray: &Ray, stats: &mut S) -> Option<Hit> {
+    todo!("step 4: the closest hit")
+}

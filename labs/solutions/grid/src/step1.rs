@@ -1,0 +1,50 @@
+//! Step 1: the box around the scene, and the slab test.
+//!
+//! Every ray first meets the grid's box: the slab test (Kay & Kajiya 1986) gives the part
+//! `[t0, t1]` of the ray inside it. Per axis, the ray is inside the slab `min ≤ o + t·d ≤ max`
+//! between `(min - o) / d` and `(max - o) / d`; the box is the intersection of the three slabs
+//! and of the ray's own interval. Mind the corner cases: a zero direction component gives
+//! infinite reciprocals (`ray.inv_dir`), `-0.0` is negative, and `0 × ∞` is NaN when the
+//! origin lies in a face plane: such a ray is inside that slab (boxes are closed).
+
+use rt_core::{Aabb, Primitive, Ray, Triangle};
+
+/// The smallest box around the valid triangles (see [`Primitive::is_valid`]); [`Aabb::EMPTY`]
+/// if there are none. Invalid triangles (a NaN vertex, zero area) must not stretch the box.
+pub fn scene_bounds(tris: &[Triangle]) -> Aabb {
+    // BEGIN SOLUTION step 1: the box around the valid triangles
+    tris.iter()
+        .filter(|t| t.is_valid())
+        .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()))
+    // END SOLUTION
+}
+
+/// The part `[t0, t1]` of the ray inside box `b`, within `[ray.t_min, t_max]`, or `None` if
+/// the ray misses it there. The box is closed: a ray that only touches a face or lies in a
+/// face plane hits it.
+pub fn slab(b: &Aabb, ray: &Ray, t_max: f32) -> Option<(f32, f32)> {
+    // BEGIN SOLUTION step 1: the slab test
+    let mut t0 = ray.t_min;
+    let mut t1 = t_max;
+    for a in 0..3 {
+        let inv = ray.inv_dir[a];
+        let (lo, hi) = if !inv.is_sign_negative() {
+            (b.min[a], b.max[a])
+        } else {
+            (b.max[a], b.min[a])
+        };
+        let near = (lo - ray.origin[a]) * inv;
+        let far = (hi - ray.origin[a]) * inv;
+        // Written as `if` so that a NaN (origin in the plane, zero direction) changes nothing.
+        if near > t0 {
+            t0 = near;
+        }
+        if far < t1 {
+            t1 = far;
+        }
+    }
+    // Rounding may put the far end a hair before a hit on the boundary: widen it a little.
+    let t1 = t1 * (1.0 + 4.0 * f32::EPSILON);
+    (t0 <= t1).then_some((t0, t1))
+    // END SOLUTION
+}

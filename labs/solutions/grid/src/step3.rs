@@ -1,0 +1,64 @@
+//! Step 3: the walk through the cells a ray crosses, in order (a 3D-DDA).
+//!
+//! Find the cell where the ray enters the grid (at `t0`, from step 1). Per axis, the ray moves
+//! to the next cell when it crosses the next cell boundary in its direction (`plane(a, c + 1)`
+//! going up, `plane(a, c)` going down, never for a zero direction component). The current
+//! cell ends at the first of the three crossings, `t_exit`; step along that axis, and stop when
+//! the walk leaves the grid or passes `t1`. Compute each crossing from the plane's coordinate
+//! ([`LabGrid::plane`]), not by adding up step lengths, so rounding does not pile up.
+
+use crate::LabGrid;
+use rt_core::Ray;
+
+/// Calls `visit(cell, t_enter, t_exit)` for each cell the ray crosses between `t0` and `t1`
+/// (where it is inside the grid's box), in order along the ray, until `visit` returns `true`
+/// or the ray leaves the grid. `t_exit` is where the ray leaves the cell (at most `t1`).
+pub fn walk(
+    grid: &LabGrid,
+    ray: &Ray,
+    t0: f32,
+    t1: f32,
+    visit: impl FnMut([u32; 3], f32, f32) -> bool,
+) {
+    // BEGIN SOLUTION step 3: the walk
+    let mut visit = visit;
+    let p = ray.at(t0);
+    let mut cell: [u32; 3] = std::array::from_fn(|a| {
+        let f = ((p[a] - grid.bounds.min[a]) * grid.inv_cell[a]).floor();
+        (f.max(0.0) as u32).min(grid.res[a] - 1)
+    });
+    let mut t_enter = t0;
+    loop {
+        // Where the ray crosses the next boundary along each axis.
+        let next: [f32; 3] = std::array::from_fn(|a| {
+            let d = ray.dir[a];
+            if d > 0.0 {
+                (grid.plane(a, cell[a] + 1) - ray.origin[a]) * ray.inv_dir[a]
+            } else if d < 0.0 {
+                (grid.plane(a, cell[a]) - ray.origin[a]) * ray.inv_dir[a]
+            } else {
+                f32::INFINITY
+            }
+        });
+        let a = (0..3)
+            .min_by(|&i, &j| next[i].total_cmp(&next[j]))
+            .unwrap_or(0);
+        let t_exit = next[a].max(t_enter);
+        if visit(cell, t_enter, t_exit.min(t1)) || t_exit >= t1 {
+            return;
+        }
+        if ray.dir[a] > 0.0 {
+            if cell[a] + 1 >= grid.res[a] {
+                return;
+            }
+            cell[a] += 1;
+        } else {
+            if cell[a] == 0 {
+                return;
+            }
+            cell[a] -= 1;
+        }
+        t_enter = t_exit;
+    }
+    // END SOLUTION
+}

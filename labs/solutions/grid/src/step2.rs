@@ -24,7 +24,12 @@ pub const MAX_RES: u32 = 128;
 pub fn resolution(bounds: &Aabb, n: usize, density: f32) -> [u32; 3] {
     // BEGIN SOLUTION step 2: the resolution
     let extent = bounds.max - bounds.min;
-    if n == 0 || !extent.is_finite() || extent.min_element() < 0.0 || density.is_nan() || density <= 0.0 {
+    if n == 0
+        || !extent.is_finite()
+        || extent.min_element() < 0.0
+        || density.is_nan()
+        || density <= 0.0
+    {
         return [1, 1, 1];
     }
     let cells = (density as f64 * n as f64).max(1.0);

@@ -1,0 +1,30 @@
+//! Step 1: boxes, and where a ray enters one.
+//!
+//! The builder needs two boxes per node: the box around its triangles (what the ray will be
+//! tested against) and the box around their centroids (where the split planes go: a plane
+//! outside it would leave one side empty). The traversal needs the distance at which a ray
+//! enters a box, to skip boxes beyond the best hit and to visit the nearer child first.
+//!
+//! The entry distance is the slab test (Kay & Kajiya 1986): per axis, the ray is between the
+//! box's two planes from `(lo - o) / d` to `(hi - o) / d`, where `lo` is the plane it meets
+//! first (the smaller one when `d` is positive, the larger when it is negative); the box is
+//! where all three slabs and the ray's own interval overlap. Mind the corner cases: a zero
+//! direction component gives infinite reciprocals (`ray.inv_dir`); `-0.0` counts as negative;
+//! `0 × ∞` is NaN when the origin lies in a face plane, and such a ray is inside that slab
+//! (boxes are closed).
+
+use rt_core::{Aabb, Primitive, Ray, SLAB_FAR_SCALE, Triangle};
+
+/// The box around the triangles `tris[id]` for `id` in `ids`, and the box around their
+/// centroids ([`Primitive::centroid`]). Both are [`Aabb::EMPTY`] when `ids` is empty.
+pub fn bounds(tris: &[Triangle], ids: &[u32]) -> (Aabb, Aabb) {
+    todo!("step 1: the boxes around the triangles and around their centroids")
+}
+
+/// The distance at which the ray enters box `b`, if it meets the box within
+/// `[ray.t_min, t_max]`; `f32::INFINITY` if it does not. A ray starting inside the box enters
+/// it at `ray.t_min`. Make the far end of the interval a little generous (multiply it by
+/// `1.0 + 4.0 * f32::EPSILON`): rounding may put it a hair before a hit on the box's face.
+pub fn entry(b: &Aabb, ray: &Ray, t_max: f32) -> f32 {
+    todo!("step 1: the entry distance")
+}

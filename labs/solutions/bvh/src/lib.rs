@@ -1,0 +1,329 @@
+//! Lab: a bounding volume hierarchy, in six steps.
+//!
+//! A BVH groups the triangles into a binary tree of boxes: each leaf lists a few triangles,
+//! each interior node's box holds its two children's. A ray enters a node only if it meets the
+//! node's box, so one box test skips a whole subtree. Unlike a grid's cells or a kd-tree's
+//! halves, sibling boxes may overlap, and every triangle sits in exactly one leaf. Read
+//! `HANDOUT.md` first; then fill in the `todo!()`s step by step, checking each with
+//! `cargo test step_N`:
+//!
+//! 1. [`step1`]: the box around some triangles and the box around their centroids; where a ray
+//!    enters a box.
+//! 2. [`step2`]: the build with a median split, written depth first into one array of nodes.
+//! 3. [`step3`]: one traversal step: which children of a node the ray enters, nearest first.
+//! 4. [`step4`]: the closest hit: a stack, nearest child first, and nothing beyond the best hit.
+//! 5. [`step5`]: the any-hit query (shadow rays): stop at the first hit.
+//! 6. [`step6`]: the surface area heuristic (SAH) instead of the median split.
+//!
+//! Nothing outside the step files needs to change: this file holds the node layout, the
+//! split dispatcher, a `validate` for the tree, and wires the steps into the
+//! [`rt_core::Accel`] trait, so the conformance kit and the shootout can run your BVH.
+
+use rt_core::{
+    Aabb, Accel, BuildStats, Hit, Primitive, Ray, Region, Stats, Triangle, ValidationError,
+    predicted_cost,
+};
+
+pub mod step1;
+pub mod step2;
+pub mod step3;
+pub mod step4;
+pub mod step5;
+pub mod step6;
+
+/// The deepest a tree may be: the traversal stack has room for this many nodes.
+pub const MAX_DEPTH: usize = 64;
+
+/// Below this depth the SAH chooses the splits; deeper, the median split does, so that even a
+/// scene the SAH splits badly (one triangle off per level) stays within [`MAX_DEPTH`].
+pub const SAH_DEPTH: usize = 24;
+
+/// How the builder chooses where to split a node's triangles.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Split {
+    /// Half the triangles to each side, along the widest axis of their centroids (step 2).
+    Median,
+    /// The cheapest of several planes by the surface area heuristic (step 6).
+    Sah,
+}
+
+/// Build parameters.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BvhParams {
+    /// How to split.
+    pub split: Split,
+    /// A node of at most this many triangles becomes a leaf with the median split; the SAH may
+    /// make leaves up to this size, and must split bigger nodes.
+    pub leaf_size: usize,
+}
+
+impl Default for BvhParams {
+    fn default() -> Self {
+        Self {
+            split: Split::Median,
+            leaf_size: 4,
+        }
+    }
+}
+
+impl BvhParams {
+    /// The SAH split (step 6), leaves of up to 8 triangles where the SAH finds them cheaper.
+    pub fn sah() -> Self {
+        Self {
+            split: Split::Sah,
+            leaf_size: 8,
+        }
+    }
+}
+
+/// One node of the flat tree, 32 bytes. The tree is stored depth first: an interior node's
+/// first child is the next node in the array, its second child is at `first`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Node {
+    /// The box around every triangle below this node.
+    pub bounds: Aabb,
+    /// A leaf: where its triangles start in [`LabBvh::ids`]. An interior node: the index of its
+    /// second child.
+    pub first: u32,
+    /// A leaf: how many triangles it lists (at least 1). An interior node: 0.
+    pub count: u32,
+}
+
+const _: () = assert!(size_of::<Node>() == 32);
+
+impl Node {
+    /// Whether this node is a leaf.
+    pub fn is_leaf(&self) -> bool {
+        self.count > 0
+    }
+}
+
+/// The BVH: the nodes, and the triangle indices the leaves list.
+#[derive(Clone, Debug)]
+pub struct LabBvh {
+    /// The nodes, depth first; node 0 is the root. Empty when no triangle is valid.
+    pub nodes: Vec<Node>,
+    /// Indices of the valid triangles, leaf after leaf: a leaf lists
+    /// `ids[first..first + count]`.
+    pub ids: Vec<u32>,
+    /// The input triangles; hits name their index here.
+    pub tris: Vec<Triangle>,
+    /// The parameters it was built with.
+    pub params: BvhParams,
+}
+
+impl LabBvh {
+    /// The two children of interior node `i`: `[i + 1, nodes[i].first]`.
+    pub fn children(&self, i: u32) -> [u32; 2] {
+        [i + 1, self.nodes[i as usize].first]
+    }
+
+    /// The triangle indices a leaf lists.
+    pub fn leaf_ids(&self, node: &Node) -> &[u32] {
+        &self.ids[node.first as usize..(node.first + node.count) as usize]
+    }
+
+    /// The cost the SAH predicts for a line through the root's box: nodes entered plus
+    /// triangles tested (traversal and intersection costing the same). Lower is better; the
+    /// SAH build (step 6) minimises it one split at a time.
+    pub fn sah_cost(&self) -> f64 {
+        let mut regions = Vec::new();
+        self.regions(&mut |r| regions.push(r));
+        predicted_cost(&regions).map_or(0.0, |c| c.visits + c.tests)
+    }
+
+    /// The depth of the deepest leaf (the root alone has depth 0).
+    pub fn depth(&self) -> usize {
+        let mut deepest = 0;
+        self.walk(&mut |_, depth| deepest = deepest.max(depth));
+        deepest
+    }
+
+    /// Calls `visit(index, depth)` for every node reachable from the root, parents first.
+    fn walk(&self, visit: &mut dyn FnMut(u32, usize)) {
+        if self.nodes.is_empty() {
+            return;
+        }
+        let mut stack = vec![(0u32, 0usize)];
+        while let Some((i, depth)) = stack.pop() {
+            visit(i, depth);
+            let node = &self.nodes[i as usize];
+            if !node.is_leaf() && depth < MAX_DEPTH {
+                for c in self.children(i) {
+                    if (c as usize) < self.nodes.len() {
+                        stack.push((c, depth + 1));
+                    }
+                }
+            }
+        }
+    }
+
+    /// Checks the tree's invariants: every child after its parent and inside the array, every
+    /// box holding what lies below it, every node reached exactly once, every valid triangle in
+    /// exactly one leaf and no invalid one in any, no leaf empty, depth within [`MAX_DEPTH`].
+    pub fn validate(&self) -> Result<(), ValidationError> {
+        let err = |s: String| Err(ValidationError(s));
+        let valid = self.tris.iter().filter(|t| t.is_valid()).count();
+        if self.nodes.is_empty() {
+            return if valid == 0 && self.ids.is_empty() {
+                Ok(())
+            } else {
+                err(format!("no nodes, but {valid} valid triangles"))
+            };
+        }
+        let n = self.nodes.len();
+        let mut reached = vec![0u32; n];
+        let mut listed = vec![0u32; self.tris.len()];
+        let mut problem = None;
+        self.walk(&mut |i, depth| {
+            reached[i as usize] += 1;
+            let node = &self.nodes[i as usize];
+            if problem.is_some() {
+                return;
+            }
+            if depth >= MAX_DEPTH {
+                problem = Some(format!(
+                    "node {i} is at depth {depth}, the limit is {MAX_DEPTH}"
+                ));
+            } else if node.is_leaf() {
+                let end = node.first as usize + node.count as usize;
+                if end > self.ids.len() {
+                    problem = Some(format!(
+                        "leaf {i} lists ids up to {end} of {}",
+                        self.ids.len()
+                    ));
+                    return;
+                }
+                for &id in self.leaf_ids(node) {
+                    let Some(t) = self.tris.get(id as usize) else {
+                        problem = Some(format!("leaf {i} lists triangle {id}, which is not one"));
+                        return;
+                    };
+                    listed[id as usize] += 1;
+                    if !t.is_valid() {
+                        problem = Some(format!("leaf {i} lists invalid triangle {id}"));
+                    } else if !node.bounds.contains(&t.bounds()) {
+                        problem = Some(format!("leaf {i}'s box does not hold triangle {id}"));
+                    }
+                }
+            } else {
+                for c in self.children(i) {
+                    if c <= i || c as usize >= n {
+                        problem = Some(format!("node {i} has child {c} (of {n} nodes)"));
+                    } else if !node.bounds.contains(&self.nodes[c as usize].bounds) {
+                        problem = Some(format!("node {i}'s box does not hold child {c}'s"));
+                    }
+                }
+            }
+        });
+        if let Some(p) = problem {
+            return err(p);
+        }
+        if let Some(i) = reached.iter().position(|&r| r != 1) {
+            return err(format!(
+                "node {i} is reached {} times, not once",
+                reached[i]
+            ));
+        }
+        for (id, t) in self.tris.iter().enumerate() {
+            if t.is_valid() && listed[id] != 1 {
+                return err(format!(
+                    "triangle {id} is in {} leaves, not one",
+                    listed[id]
+                ));
+            }
+        }
+        if self.ids.len() != valid {
+            return err(format!(
+                "{} ids for {valid} valid triangles",
+                self.ids.len()
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Where to split a node's triangles `ids`, whose box is `bounds` and centroids' box
+/// `centroids`, at depth `depth`: reorders `ids` and returns how many of them go to the first
+/// child, or `None` to make a leaf. Dispatches on `params.split`, and guards the build: the SAH
+/// gives way to the median split where it finds no split but the node is too big for a leaf,
+/// and deep in the tree; a split that leaves one side empty makes a leaf instead of looping.
+pub fn split(
+    tris: &[Triangle],
+    params: &BvhParams,
+    ids: &mut [u32],
+    bounds: &Aabb,
+    centroids: &Aabb,
+    depth: usize,
+) -> Option<usize> {
+    let n = ids.len();
+    if n <= 1 || depth + 1 >= MAX_DEPTH {
+        return None;
+    }
+    let mid = match params.split {
+        Split::Median if n <= params.leaf_size => return None,
+        Split::Median => step2::median_split(tris, ids, centroids),
+        Split::Sah if depth >= SAH_DEPTH => step2::median_split(tris, ids, centroids),
+        Split::Sah => match step6::sah_split(tris, ids, bounds, centroids, params.leaf_size) {
+            Some(mid) => mid,
+            None if n > params.leaf_size => step2::median_split(tris, ids, centroids),
+            None => return None,
+        },
+    };
+    (0 < mid && mid < n).then_some(mid)
+}
+
+impl Accel for LabBvh {
+    type Prim = Triangle;
+    type Params = BvhParams;
+    const NAME: &'static str = "lab-bvh";
+
+    fn presets() -> Vec<(&'static str, BvhParams)> {
+        vec![("default", BvhParams::default()), ("sah", BvhParams::sah())]
+    }
+
+    fn build(prims: &[Triangle], params: &BvhParams) -> Self {
+        step2::build(prims, params)
+    }
+
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        step4::closest_hit(self, ray, stats)
+    }
+
+    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+        step5::any_hit(self, ray, stats)
+    }
+
+    fn memory_bytes(&self) -> usize {
+        size_of::<Self>()
+            + self.nodes.capacity() * size_of::<Node>()
+            + self.ids.capacity() * 4
+            + self.tris.capacity() * size_of::<Triangle>()
+    }
+
+    fn build_stats(&self) -> BuildStats {
+        let leaves = self.nodes.iter().filter(|n| n.is_leaf()).count();
+        BuildStats {
+            nodes: self.nodes.len(),
+            leaves,
+            empty_leaves: 0,
+            max_depth: self.depth(),
+            prim_refs: self.ids.len(),
+            valid_prims: self.tris.iter().filter(|t| t.is_valid()).count(),
+            extra: vec![("sah_cost", self.sah_cost())],
+        }
+    }
+
+    fn regions(&self, visit: &mut dyn FnMut(Region)) {
+        self.walk(&mut |i, depth| {
+            let node = &self.nodes[i as usize];
+            visit(Region {
+                bounds: node.bounds,
+                depth: depth as u32,
+                prims: node.is_leaf().then_some(node.count),
+                split: None,
+            });
+        });
+    }
+}

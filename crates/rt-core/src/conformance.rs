@@ -76,15 +76,17 @@ pub fn compare_rays<A: Accel>(
     reference: &BruteForce<A::Prim>,
     rays: &[Ray],
 ) -> Result<(), Mismatch> {
-    compare_rays_probed(accel, reference, rays, &Probe::default())
+    compare_rays_probed(accel, reference, rays, &Probe::default(), true)
 }
 
-/// [`compare_rays`], telling `probe` which ray each query is about before making it.
+/// [`compare_rays`], telling `probe` which ray each query is about before making it; with
+/// `any` false, closest-hit queries only.
 fn compare_rays_probed<A: Accel>(
     accel: &A,
     reference: &BruteForce<A::Prim>,
     rays: &[Ray],
     probe: &Probe,
+    any: bool,
 ) -> Result<(), Mismatch> {
     for ray in rays {
         probe.tracing(ray);
@@ -94,7 +96,7 @@ fn compare_rays_probed<A: Accel>(
             // an origin at 10³⁰ must not walk the whole tree).
             let mut c = Counters::default();
             let hit = accel.intersect_with(ray, &mut c);
-            let occluded = accel.occluded_with(ray, &mut c);
+            let occluded = any && accel.occluded_with(ray, &mut c);
             if hit.is_some() || occluded || c.prim_tests > 0 || c.node_visits > 2 {
                 return Err(Mismatch {
                     query: "invalid ray",
@@ -145,6 +147,9 @@ fn compare_rays_probed<A: Accel>(
                 got: traced,
                 detail: why.into(),
             });
+        }
+        if !any {
+            continue;
         }
         let occluded = accel.occluded(ray);
         if occluded != expected.is_some() {
@@ -246,6 +251,17 @@ pub fn check_case_within<A: Accel + 'static>(
     rays: &[Ray],
     stall: std::time::Duration,
 ) -> Result<(), String> {
+    check_queries::<A>(params, prims, rays, stall, true)
+}
+
+/// [`check_case_within`], with `any` false checking closest-hit queries only.
+fn check_queries<A: Accel + 'static>(
+    params: &A::Params,
+    prims: &[A::Prim],
+    rays: &[Ray],
+    stall: std::time::Duration,
+    any: bool,
+) -> Result<(), String> {
     let (params, prims, rays) = (params.clone(), prims.to_vec(), rays.to_vec());
     let scene = scene_summary(&prims);
     watched::<A>(stall, &scene, move |probe| {
@@ -265,7 +281,7 @@ pub fn check_case_within<A: Accel + 'static>(
         }
         check_regions(&accel)
             .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
-        compare_rays_probed(&accel, &reference, &rays, probe)
+        compare_rays_probed(&accel, &reference, &rays, probe, any)
             .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))
     })
 }
@@ -492,6 +508,49 @@ pub fn check_scene<A: Accel<Prim = Triangle> + 'static>(params: &A::Params, name
     }
 }
 
+/// Checks only the closest-hit queries of structure `A` with `params` on the named scene, under
+/// the same watchdog: for a structure whose any-hit query is not written yet, such as a lab's
+/// template before its any-hit step. Invalid rays must still return at once.
+///
+/// # Panics
+/// With a description of the first disagreement with brute force.
+pub fn check_scene_closest<A: Accel<Prim = Triangle> + 'static>(params: &A::Params, name: &str) {
+    let s = scene(name);
+    if let Err(e) = check_queries::<A>(params, &s.triangles, &s.rays, STALL_LIMIT, false) {
+        panic!("conformance scene `{name}` (closest hit) failed: {e}");
+    }
+}
+
+/// `n` random triangles in the cube from -1 to 1, each with two edges of length up to about
+/// `size × √3` from a random first vertex, drawn from `seed`: a scene for tests that need many
+/// triangles of one size (the lab templates' step tests).
+pub fn small_triangles(seed: u64, n: usize, size: f32) -> Vec<Triangle> {
+    let mut rng = Rng::new(seed);
+    let lo = Vec3::splat(-1.0);
+    let hi = Vec3::ONE;
+    (0..n)
+        .map(|_| {
+            let c = rng.in_box(lo, hi);
+            let a = rng.in_box(lo, hi);
+            let b = rng.in_box(lo, hi);
+            Triangle::new(c, c + a * size, c + b * size)
+        })
+        .collect()
+}
+
+/// `n` rays from random origins in the cube from -2 to 2 towards random points in the cube from
+/// -1 to 1, drawn from `seed`: about half start inside the smaller cube, most cross it.
+pub fn rays_into_cube(seed: u64, n: usize) -> Vec<Ray> {
+    let mut rng = Rng::new(seed);
+    (0..n)
+        .map(|_| {
+            let o = rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0));
+            let target = rng.in_box(Vec3::splat(-1.0), Vec3::ONE);
+            Ray::new(o, (target - o).normalize())
+        })
+        .collect()
+}
+
 /// Runs proptest on random triangle scenes and rays for structure `A` with `params`.
 ///
 /// Coordinates are drawn partly from a coarse lattice so that shared vertices, coplanar
@@ -656,7 +715,8 @@ pub fn check_all<A: Accel<Prim = Triangle> + 'static>(params: &A::Params) {
 }
 
 /// Generates a test module with one `#[test]` per adversarial scene and one proptest run, for a
-/// triangle structure type and a parameter expression.
+/// triangle structure type and a parameter expression. With `closest_hit:` before the module
+/// name, one test per scene of its closest-hit queries only ([`check_scene_closest`]).
 ///
 /// ```
 /// // For example, in rt-bvh's tests:
@@ -672,22 +732,37 @@ macro_rules! conformance_tests {
             fn params() -> <$accel as $crate::Accel>::Params {
                 $params
             }
-            $crate::conformance_tests!(@scenes $accel;
-                empty_scene one_triangle shared_edge identical_triangles equal_centroids
-                zero_area_triangles axis_parallel_rays rays_in_box_faces origins_inside
-                large_coordinates nan_vertex exponential_chain planar_triangles
-                spanning_triangles invalid_rays lattice);
+            $crate::conformance_tests!(@scenes check_scene, $accel);
             #[test]
             fn random_scenes() {
                 $crate::conformance::check_random::<$accel>(&params());
             }
         }
     };
-    (@scenes $accel:ty; $($scene:ident)*) => {
+    // One test per scene of closest-hit queries only (`check_scene_closest`), no random scenes:
+    // for a structure without its any-hit query yet.
+    (closest_hit: $module:ident, $accel:ty, $params:expr) => {
+        mod $module {
+            #[allow(unused_imports)]
+            use super::*;
+            fn params() -> <$accel as $crate::Accel>::Params {
+                $params
+            }
+            $crate::conformance_tests!(@scenes check_scene_closest, $accel);
+        }
+    };
+    (@scenes $check:ident, $accel:ty) => {
+        $crate::conformance_tests!(@each $check, $accel;
+            empty_scene one_triangle shared_edge identical_triangles equal_centroids
+            zero_area_triangles axis_parallel_rays rays_in_box_faces origins_inside
+            large_coordinates nan_vertex exponential_chain planar_triangles
+            spanning_triangles invalid_rays lattice);
+    };
+    (@each $check:ident, $accel:ty; $($scene:ident)*) => {
         $(
             #[test]
             fn $scene() {
-                $crate::conformance::check_scene::<$accel>(&params(), stringify!($scene));
+                $crate::conformance::$check::<$accel>(&params(), stringify!($scene));
             }
         )*
     };

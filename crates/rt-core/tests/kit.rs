@@ -103,3 +103,17 @@ fn the_random_scenes_report_is_short() {
         message.lines().count()
     );
 }
+
+#[test]
+fn the_test_macro_lists_every_scene_of_the_kit() {
+    // `conformance_tests!` spells the scene names out (a macro cannot loop over a const slice):
+    // if the kit grows a scene, the macro's list must grow too.
+    let source = include_str!("../src/conformance.rs");
+    let start = source
+        .find("conformance_tests!(@each $check, $accel;")
+        .expect("the macro's scene list");
+    let list = &source[start..];
+    let list = &list[list.find(';').unwrap() + 1..list.find(')').unwrap()];
+    let listed: Vec<&str> = list.split_whitespace().collect();
+    assert_eq!(listed, rt_core::conformance::SCENES);
+}

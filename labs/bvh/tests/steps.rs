@@ -3,47 +3,9 @@
 //! conformance kit (`rt_core::conformance`) and brute force.
 
 use lab_bvh::{BvhParams, LabBvh, Node, Split, step1, step2, step3, step6};
-use rt_core::conformance::{self, SCENES};
+use rt_core::conformance::{self, SCENES, rays_into_cube, small_triangles};
 use rt_core::glam::Vec3;
-use rt_core::{Aabb, Accel, BruteForce, Counters, Hit, Primitive, Ray, Rng, Triangle};
-
-/// A random soup of `n` small triangles in the box from -1 to 1.
-fn soup(seed: u64, n: usize, size: f32) -> Vec<Triangle> {
-    let mut rng = Rng::new(seed);
-    let mut p = || {
-        Vec3::new(
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-        )
-    };
-    (0..n)
-        .map(|_| {
-            let c = p();
-            Triangle::new(c, c + p() * size, c + p() * size)
-        })
-        .collect()
-}
-
-/// Random rays from outside and inside the box from -1 to 1.
-fn rays(seed: u64, n: usize) -> Vec<Ray> {
-    let mut rng = Rng::new(seed);
-    (0..n)
-        .map(|_| {
-            let o = Vec3::new(
-                rng.range(-2.0, 2.0),
-                rng.range(-2.0, 2.0),
-                rng.range(-2.0, 2.0),
-            );
-            let target = Vec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            );
-            Ray::new(o, (target - o).normalize())
-        })
-        .collect()
-}
+use rt_core::{Aabb, Accel, BruteForce, Counters, Hit, Primitive, Ray, Triangle};
 
 /// The triangles below node `i`.
 fn below(bvh: &LabBvh, i: u32) -> Vec<u32> {
@@ -72,7 +34,7 @@ fn leaves(bvh: &LabBvh) -> impl Iterator<Item = &Node> {
 
 #[test]
 fn step_1_bounds_hold_the_triangles_and_their_centroids() {
-    let tris = soup(1, 100, 0.3);
+    let tris = small_triangles(1, 100, 0.3);
     let ids: Vec<u32> = (0..100).filter(|i| i % 3 == 0).collect();
     let (b, c) = step1::bounds(&tris, &ids);
     let want_b = ids
@@ -125,7 +87,7 @@ fn step_1_entry_handles_the_corner_cases() {
 #[test]
 fn step_1_entry_agrees_with_the_reference() {
     let b = Aabb::new(Vec3::new(-0.5, -0.25, 0.0), Vec3::new(0.5, 0.75, 0.5));
-    for ray in rays(11, 4000) {
+    for ray in rays_into_cube(11, 4000) {
         let got = step1::entry(&b, &ray, ray.t_max);
         match b.intersect(&ray, ray.t_max) {
             Some((near, _)) if got.is_finite() => assert!(
@@ -144,7 +106,7 @@ fn step_1_entry_agrees_with_the_reference() {
 #[test]
 fn step_2_median_split_halves_along_the_widest_axis() {
     // Spread along y: the split must be by the centroids' y.
-    let tris: Vec<Triangle> = soup(2, 101, 0.1)
+    let tris: Vec<Triangle> = small_triangles(2, 101, 0.1)
         .into_iter()
         .map(|t| Triangle::new(t.v0 * Vec3::new(1.0, 5.0, 1.0), t.v1, t.v2))
         .collect();
@@ -167,7 +129,7 @@ fn step_2_median_split_halves_along_the_widest_axis() {
 
 #[test]
 fn step_2_tree_is_valid_balanced_and_depth_first() {
-    let mut tris = soup(5, 1000, 0.2);
+    let mut tris = small_triangles(5, 1000, 0.2);
     tris.push(Triangle::new(Vec3::ZERO, Vec3::splat(f32::NAN), Vec3::X));
     tris.push(Triangle::new(Vec3::ZERO, Vec3::X, Vec3::X * 2.0));
     let bvh = LabBvh::build(&tris, &BvhParams::default());
@@ -215,9 +177,9 @@ fn step_2_every_scene_of_the_kit_builds_a_valid_tree() {
 
 #[test]
 fn step_3_order_gives_the_children_entered_nearest_first() {
-    let bvh = LabBvh::build(&soup(7, 300, 0.2), &BvhParams::default());
+    let bvh = LabBvh::build(&small_triangles(7, 300, 0.2), &BvhParams::default());
     let mut checked = 0;
-    for ray in rays(8, 200) {
+    for ray in rays_into_cube(8, 200) {
         for i in 0..bvh.nodes.len() as u32 {
             if bvh.nodes[i as usize].is_leaf() {
                 continue;
@@ -293,51 +255,7 @@ fn step_3_order_depends_on_the_ray_and_on_t_max() {
     );
 }
 
-/// Step 4's check on one of the kit's scenes: the closest hit of every ray agrees with brute
-/// force, and invalid rays return at once.
-fn closest_hits_agree(scene: &str) {
-    let s = conformance::scene(scene);
-    let bvh = LabBvh::build(&s.triangles, &BvhParams::default());
-    let reference = BruteForce::build(&s.triangles, &());
-    for ray in &s.rays {
-        let mut c = Counters::default();
-        let got = bvh.intersect_with(ray, &mut c);
-        if !ray.is_valid() {
-            assert!(
-                got.is_none() && c.node_visits == 0,
-                "invalid ray {ray:?}: {got:?}, {c:?}"
-            );
-            continue;
-        }
-        let want = reference.intersect(ray);
-        assert!(
-            Hit::agree(want, got),
-            "scene {scene}, ray {}: expected {want:?}, got {got:?}",
-            ray.to_line()
-        );
-    }
-}
-
-macro_rules! per_scene {
-    ($module:ident, $check:expr) => {
-        mod $module {
-            per_scene!(@tests $check; empty_scene one_triangle shared_edge identical_triangles
-                equal_centroids zero_area_triangles axis_parallel_rays rays_in_box_faces
-                origins_inside large_coordinates nan_vertex exponential_chain planar_triangles
-                spanning_triangles invalid_rays lattice);
-        }
-    };
-    (@tests $check:expr; $($scene:ident)*) => {
-        $(
-            #[test]
-            fn $scene() {
-                ($check)(stringify!($scene));
-            }
-        )*
-    };
-}
-
-per_scene!(step_4_closest_hit, super::closest_hits_agree);
+rt_core::conformance_tests!(closest_hit: step_4_closest_hit, LabBvh, BvhParams::default());
 
 #[test]
 fn step_4_near_first_tests_only_the_nearest_sheets() {
@@ -389,17 +307,9 @@ fn step_4_near_first_tests_only_the_nearest_sheets() {
     }
 }
 
-/// The conformance kit, as any structure meets it: every query against brute force.
-fn kit(scene: &str) {
-    conformance::check_scene::<LabBvh>(&BvhParams::default(), scene);
-}
-
-per_scene!(step_5_kit, super::kit);
-
-#[test]
-fn step_5_kit_random_scenes() {
-    conformance::check_random::<LabBvh>(&BvhParams::default());
-}
+// The conformance kit, as any structure meets it: every query against brute force, on every
+// scene of the kit (one test each) and on random scenes.
+rt_core::conformance_tests!(step_5_kit, LabBvh, BvhParams::default());
 
 #[test]
 fn step_5_any_hit_stops_at_the_first_hit() {
@@ -433,7 +343,7 @@ fn step_5_any_hit_stops_at_the_first_hit() {
 fn step_6_sah_separates_two_clusters() {
     // 10 triangles near x = -10, 90 near x = +10. The median split puts 50 on each side, 40 of
     // them from the far cluster; the SAH cuts the empty space between the clusters.
-    let mut tris: Vec<Triangle> = soup(12, 10, 0.2)
+    let mut tris: Vec<Triangle> = small_triangles(12, 10, 0.2)
         .into_iter()
         .map(|t| {
             Triangle::new(
@@ -443,7 +353,7 @@ fn step_6_sah_separates_two_clusters() {
             )
         })
         .collect();
-    tris.extend(soup(13, 90, 0.2).into_iter().map(|t| {
+    tris.extend(small_triangles(13, 90, 0.2).into_iter().map(|t| {
         Triangle::new(
             t.v0 + Vec3::X * 10.0,
             t.v1 + Vec3::X * 10.0,
@@ -533,20 +443,5 @@ fn step_6_sah_beats_the_median_split_on_the_teapot_in_a_stadium() {
     );
 }
 
-/// The kit again, on the SAH tree.
-fn kit_sah(scene: &str) {
-    conformance::check_scene::<LabBvh>(&BvhParams::sah(), scene);
-}
-
-per_scene!(step_6_kit, super::kit_sah);
-
-#[test]
-fn step_6_kit_random_scenes() {
-    conformance::check_random::<LabBvh>(&BvhParams::sah());
-}
-
-#[test]
-fn every_scene_of_the_kit_is_covered() {
-    // If the kit grows a scene, this lab's list must grow too.
-    assert_eq!(SCENES.len(), 16, "{SCENES:?}");
-}
+// The kit again, on the SAH tree.
+rt_core::conformance_tests!(step_6_kit, LabBvh, BvhParams::sah());

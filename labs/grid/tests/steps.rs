@@ -3,47 +3,9 @@
 //! conformance kit (`rt_core::conformance`) and brute force.
 
 use lab_grid::{GridParams, LabGrid, step1, step2, step3, step6};
-use rt_core::conformance::{self, SCENES};
+use rt_core::conformance::{self, rays_into_cube, small_triangles};
 use rt_core::glam::Vec3;
-use rt_core::{Aabb, Accel, BruteForce, Counters, Hit, Primitive, Ray, Rng, Triangle};
-
-/// A random soup of `n` small triangles in the box from -1 to 1.
-fn soup(seed: u64, n: usize, size: f32) -> Vec<Triangle> {
-    let mut rng = Rng::new(seed);
-    let mut p = || {
-        Vec3::new(
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-            rng.range(-1.0, 1.0),
-        )
-    };
-    (0..n)
-        .map(|_| {
-            let c = p();
-            Triangle::new(c, c + p() * size, c + p() * size)
-        })
-        .collect()
-}
-
-/// Random rays from outside and inside the box from -1 to 1.
-fn rays(seed: u64, n: usize) -> Vec<Ray> {
-    let mut rng = Rng::new(seed);
-    (0..n)
-        .map(|_| {
-            let o = Vec3::new(
-                rng.range(-2.0, 2.0),
-                rng.range(-2.0, 2.0),
-                rng.range(-2.0, 2.0),
-            );
-            let target = Vec3::new(
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-                rng.range(-1.0, 1.0),
-            );
-            Ray::new(o, (target - o).normalize())
-        })
-        .collect()
-}
+use rt_core::{Aabb, Accel, BruteForce, Counters, Hit, Primitive, Ray, Triangle};
 
 #[test]
 fn step_1_scene_bounds_ignore_invalid_triangles() {
@@ -102,7 +64,7 @@ fn step_1_slab_test_handles_the_corner_cases() {
 #[test]
 fn step_1_slab_test_agrees_with_the_reference() {
     let b = Aabb::new(Vec3::new(-0.5, -0.25, 0.0), Vec3::new(0.5, 0.75, 0.5));
-    for ray in rays(11, 4000) {
+    for ray in rays_into_cube(11, 4000) {
         let got = step1::slab(&b, &ray, ray.t_max);
         let want = b.intersect(&ray, ray.t_max);
         match (got, want) {
@@ -155,7 +117,7 @@ fn step_2_resolution_gives_about_density_times_n_near_cubic_cells() {
 
 #[test]
 fn step_2_every_triangle_is_listed_in_every_cell_it_touches_and_no_other() {
-    let mut tris = soup(5, 300, 0.3);
+    let mut tris = small_triangles(5, 300, 0.3);
     tris.push(Triangle::new(Vec3::ZERO, Vec3::splat(f32::NAN), Vec3::X));
     let grid = LabGrid::build(&tris, &GridParams::default());
     let n = grid.res.iter().product::<u32>() as usize;
@@ -184,10 +146,10 @@ fn step_2_every_triangle_is_listed_in_every_cell_it_touches_and_no_other() {
 
 #[test]
 fn step_3_walk_visits_the_cells_the_ray_crosses_in_order() {
-    let grid = LabGrid::build(&soup(7, 400, 0.2), &GridParams::default());
+    let grid = LabGrid::build(&small_triangles(7, 400, 0.2), &GridParams::default());
     let size = (grid.bounds.max - grid.bounds.min) / Vec3::from_array(grid.res.map(|r| r as f32));
     let tol = size.min_element() * 1e-3;
-    for ray in rays(8, 300) {
+    for ray in rays_into_cube(8, 300) {
         let Some((t0, t1)) = step1::slab(&grid.bounds, &ray, ray.t_max) else {
             continue;
         };
@@ -240,51 +202,7 @@ fn step_3_walk_visits_the_cells_the_ray_crosses_in_order() {
     }
 }
 
-/// Step 4's check on one of the kit's scenes: the closest hit of every ray agrees with brute
-/// force, and invalid rays return at once.
-fn closest_hits_agree(scene: &str) {
-    let s = conformance::scene(scene);
-    let grid = LabGrid::build(&s.triangles, &GridParams::default());
-    let reference = BruteForce::build(&s.triangles, &());
-    for ray in &s.rays {
-        let mut c = Counters::default();
-        let got = grid.intersect_with(ray, &mut c);
-        if !ray.is_valid() {
-            assert!(
-                got.is_none() && c.prim_tests == 0,
-                "invalid ray {ray:?}: {got:?}, {c:?}"
-            );
-            continue;
-        }
-        let want = reference.intersect(ray);
-        assert!(
-            Hit::agree(want, got),
-            "scene {scene}, ray {}: expected {want:?}, got {got:?}",
-            ray.to_line()
-        );
-    }
-}
-
-macro_rules! per_scene {
-    ($module:ident, $check:expr) => {
-        mod $module {
-            per_scene!(@tests $check; empty_scene one_triangle shared_edge identical_triangles
-                equal_centroids zero_area_triangles axis_parallel_rays rays_in_box_faces
-                origins_inside large_coordinates nan_vertex exponential_chain planar_triangles
-                spanning_triangles invalid_rays lattice);
-        }
-    };
-    (@tests $check:expr; $($scene:ident)*) => {
-        $(
-            #[test]
-            fn $scene() {
-                ($check)(stringify!($scene));
-            }
-        )*
-    };
-}
-
-per_scene!(step_4_closest_hit, super::closest_hits_agree);
+rt_core::conformance_tests!(closest_hit: step_4_closest_hit, LabGrid, GridParams::default());
 
 #[test]
 fn step_4_a_hit_beyond_the_cell_does_not_end_the_walk() {
@@ -304,13 +222,13 @@ fn step_4_a_hit_beyond_the_cell_does_not_end_the_walk() {
     ];
     let mut all = tris.clone();
     all.extend(
-        soup(3, 200, 0.05)
+        small_triangles(3, 200, 0.05)
             .into_iter()
             .map(|t| Triangle::new(t.v0 * 10.0, t.v1 * 10.0, t.v2 * 10.0)),
     );
     let grid = LabGrid::build(&all, &GridParams::default());
     let reference = BruteForce::build(&all, &());
-    for ray in rays(4, 500)
+    for ray in rays_into_cube(4, 500)
         .iter()
         .map(|r| Ray::new(r.origin * 10.0, r.dir))
     {
@@ -322,17 +240,9 @@ fn step_4_a_hit_beyond_the_cell_does_not_end_the_walk() {
     }
 }
 
-/// The conformance kit, as any structure meets it: every query against brute force.
-fn kit(scene: &str) {
-    conformance::check_scene::<LabGrid>(&GridParams::default(), scene);
-}
-
-per_scene!(step_5_kit, super::kit);
-
-#[test]
-fn step_5_kit_random_scenes() {
-    conformance::check_random::<LabGrid>(&GridParams::default());
-}
+// The conformance kit, as any structure meets it: every query against brute force, on every
+// scene of the kit (one test each) and on random scenes.
+rt_core::conformance_tests!(step_5_kit, LabGrid, GridParams::default());
 
 #[test]
 fn step_5_any_hit_stops_at_the_first_hit() {
@@ -377,7 +287,7 @@ fn step_6_mailbox_remembers_the_last_slots_ids() {
 #[test]
 fn step_6_no_ray_tests_a_triangle_twice_in_a_row_of_cells() {
     // Ten large triangles, each listed in many cells, among small ones.
-    let mut tris = soup(9, 500, 0.05);
+    let mut tris = small_triangles(9, 500, 0.05);
     tris.extend((0..10).map(|i| {
         let z = -0.9 + 0.18 * i as f32;
         Triangle::new(
@@ -389,7 +299,7 @@ fn step_6_no_ray_tests_a_triangle_twice_in_a_row_of_cells() {
     let plain = LabGrid::build(&tris, &GridParams::default());
     let boxed = LabGrid::build(&tris, &GridParams::mailboxed());
     let (mut without, mut with) = (Counters::default(), Counters::default());
-    for ray in rays(10, 500) {
+    for ray in rays_into_cube(10, 500) {
         let a = plain.intersect_with(&ray, &mut without);
         let b = boxed.intersect_with(&ray, &mut with);
         assert_eq!(a, b, "{}", ray.to_line());
@@ -402,14 +312,4 @@ fn step_6_no_ray_tests_a_triangle_twice_in_a_row_of_cells() {
     );
 }
 
-fn kit_mailboxed(scene: &str) {
-    conformance::check_scene::<LabGrid>(&GridParams::mailboxed(), scene);
-}
-
-per_scene!(step_6_kit, super::kit_mailboxed);
-
-#[test]
-fn every_scene_of_the_kit_is_covered() {
-    // If the kit grows a scene, this lab's list must grow too.
-    assert_eq!(SCENES.len(), 16, "{SCENES:?}");
-}
+rt_core::conformance_tests!(step_6_kit, LabGrid, GridParams::mailboxed());

@@ -22,7 +22,8 @@ use rt_core::{Ray, SLAB_FAR_SCALE, Stats};
 /// Walks the leaves the ray's interval `[t0, t1]` reaches, nearest first, calling
 /// `visit(leaf, t0, t1, stats)` with each leaf's part of the interval. `visit` returns a limit:
 /// leaves that start beyond it are skipped (`f32::INFINITY` skips none, `f32::NEG_INFINITY`
-/// ends the walk). Reports each node entered (interior or leaf) to `stats`.
+/// ends the walk). Reports each node entered (interior or leaf) to `stats`. (To call `visit`,
+/// rebind it as mutable: `let mut visit = visit;`.)
 pub fn walk<S: Stats>(
     lab: &LabKdTree,
     ray: &Ray,

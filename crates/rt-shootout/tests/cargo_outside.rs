@@ -51,7 +51,6 @@ rt-shootout = {{ path = "{shootout}" }}
 
     let out = Command::new(env!("CARGO"))
         .current_dir(&krate)
-        .env_remove("CARGO_TARGET_DIR")
         .env("CARGO_TARGET_DIR", root.join("target/outside"))
         .args(["run", "--quiet", "--offline", "--"])
         .args(

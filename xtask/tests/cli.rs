@@ -429,3 +429,44 @@ fn json_carries_the_sah_prediction_for_structures_that_describe_themselves() {
         }
     }
 }
+
+/// Every row's per-ray answers are the same to the bit on one thread and on two: the parallel
+/// builds and the parallel tracing change nothing a user can see.
+#[test]
+fn answers_are_bit_identical_on_one_thread_and_on_two() {
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("threads");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("rays.txt");
+    let mesh = rt_core::scenes::builtin("teapot-in-stadium").unwrap();
+    let lines: Vec<String> = rt_core::raygen::incoherent_rays(&mesh.bounds(), 3000, 11)
+        .iter()
+        .map(|r| r.to_line())
+        .collect();
+    std::fs::write(&file, lines.join("\n")).unwrap();
+    let run = |threads: &str| {
+        json(&compare(&[
+            "--scene",
+            "teapot-in-stadium",
+            "--rays-file",
+            file.to_str().unwrap(),
+            "--json",
+            "--threads",
+            threads,
+        ]))
+    };
+    let (one, two) = (run("1"), run("2"));
+    let rows = |v: &serde_json::Value| v["results"].as_array().unwrap().clone();
+    let (one, two) = (rows(&one), rows(&two));
+    assert_eq!(one.len(), two.len());
+    assert!(one.len() > 10, "every row runs: {}", one.len());
+    for (a, b) in one.iter().zip(&two) {
+        assert_eq!(a["structure"], b["structure"]);
+        assert_eq!(a["ray_hits"].as_array().unwrap().len(), 3000);
+        assert!(
+            a["ray_hits"] == b["ray_hits"],
+            "{}: answers differ between --threads 1 and --threads 2",
+            a["structure"]
+        );
+        assert_eq!(a["nodes"], b["nodes"], "{}", a["structure"]);
+    }
+}

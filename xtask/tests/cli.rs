@@ -30,6 +30,12 @@ fn missing_file_unknown_scene_and_unknown_structure_are_one_line_errors() {
         &compare(&["--scene", "atlantis"]),
         "built-in scenes: sphereflake",
     );
+    for bad in ["random-soup:0", "terrain:lots", "sphereflake:1G"] {
+        assert_one_line_error(
+            &compare(&["--scene", bad]),
+            "the size must be a triangle count",
+        );
+    }
     assert_one_line_error(
         &compare(&["--structures", "bvh,octopus"]),
         "unknown structure `octopus`",
@@ -468,5 +474,34 @@ fn answers_are_bit_identical_on_one_thread_and_on_two() {
             a["structure"]
         );
         assert_eq!(a["nodes"], b["nodes"], "{}", a["structure"]);
+    }
+}
+
+/// A built-in scene with a size: about that many triangles, every answer checked.
+#[test]
+fn sized_built_in_scenes_run() {
+    for (spec, least, most) in [
+        ("terrain:50k", 45_000, 55_000),
+        ("sphereflake:20k", 14_000, 28_000),
+    ] {
+        let v = json(&compare(&[
+            "--scene",
+            spec,
+            "--structures",
+            "bvh,grid",
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--repeats",
+            "1",
+            "--json",
+        ]));
+        assert_eq!(v["scene"], spec);
+        let n = v["triangles"].as_u64().unwrap();
+        assert!((least..=most).contains(&n), "{spec}: {n} triangles");
+        for row in v["results"].as_array().unwrap() {
+            assert_eq!(row["mismatches"], 0, "{spec}: {row}");
+        }
     }
 }

@@ -4,14 +4,18 @@ use crate::raygen::Camera;
 use crate::{Mesh, Rng};
 use glam::Vec3;
 
-/// A built-in scene: its name (what `--scene` takes) and a one-line description.
+/// A built-in scene: its name (what `--scene` takes), a one-line description, and how it is
+/// made at any size.
 #[derive(Clone, Copy, Debug)]
 pub struct BuiltinScene {
-    /// Name accepted by [`builtin`].
+    /// Name accepted by [`builtin`], alone or with a size: `random-soup:10M`.
     pub name: &'static str,
     /// What the scene is and why it is interesting.
     pub description: &'static str,
-    make: fn() -> Mesh,
+    /// About how many triangles the bare name gives.
+    pub default_size: usize,
+    /// Makes the scene with about this many triangles.
+    make: fn(usize) -> Mesh,
     /// Where primary rays look from, when the scene has a subject to look at; `None` frames the
     /// whole scene ([`Camera::framing`]).
     pub camera: Option<Camera>,
@@ -24,31 +28,89 @@ impl BuiltinScene {
         self.camera
             .unwrap_or_else(|| Camera::framing(bounds, width, height))
     }
+
+    /// The scene with about `triangles` triangles (its own default at [`Self::default_size`]).
+    pub fn make(&self, triangles: usize) -> Mesh {
+        (self.make)(triangles)
+    }
 }
 
-/// The built-in scene called `name`'s description, if there is one.
-pub fn find(name: &str) -> Option<&'static BuiltinScene> {
+/// The most triangles a sized built-in scene may ask for (`random-soup:100M`): beyond it the
+/// mesh alone would take several GiB.
+pub const MAX_SIZE: usize = 100_000_000;
+
+/// The built-in scene `spec` names (`name` or `name:size`), if there is one; the size is not
+/// checked here (see [`resolve`]).
+pub fn find(spec: &str) -> Option<&'static BuiltinScene> {
+    let name = spec.split_once(':').map_or(spec, |(name, _)| name);
     BUILTIN_SCENES.iter().find(|s| s.name == name)
+}
+
+/// The built-in scene and triangle count `spec` asks for: `name` (the scene's default size) or
+/// `name:size`, where size is a count with an optional `k` (thousand) or `M` (million) suffix,
+/// such as `20000`, `500k` or `2.5M`, from 1 to [`MAX_SIZE`]. `Ok(None)` when `spec` names no
+/// built-in scene (it may be a file).
+///
+/// # Errors
+/// A one-line message when the name is built in but the size is not a valid count.
+///
+/// ```
+/// use rt_core::scenes::resolve;
+/// let (scene, size) = resolve("random-soup:10M").unwrap().unwrap();
+/// assert_eq!((scene.name, size), ("random-soup", 10_000_000));
+/// assert_eq!(resolve("terrain").unwrap().unwrap().1, 100_000);
+/// assert!(resolve("random-soup:lots").is_err());
+/// assert!(resolve("bunny.obj").unwrap().is_none());
+/// ```
+pub fn resolve(spec: &str) -> Result<Option<(&'static BuiltinScene, usize)>, String> {
+    let Some(scene) = find(spec) else {
+        return Ok(None);
+    };
+    let Some((_, size)) = spec.split_once(':') else {
+        return Ok(Some((scene, scene.default_size)));
+    };
+    let (digits, unit) = match size.strip_suffix(['k', 'K']) {
+        Some(d) => (d, 1e3),
+        None => match size.strip_suffix(['m', 'M']) {
+            Some(d) => (d, 1e6),
+            None => (size, 1.0),
+        },
+    };
+    let count = digits
+        .parse::<f64>()
+        .ok()
+        .map(|n| (n * unit).round())
+        .filter(|n| n.is_finite() && *n >= 1.0 && *n <= MAX_SIZE as f64);
+    match count {
+        Some(n) => Ok(Some((scene, n as usize))),
+        None => Err(format!(
+            "scene `{spec}`: the size must be a triangle count from 1 to 100M, such as 20000, \
+             500k or 2.5M"
+        )),
+    }
 }
 
 /// Every built-in scene; the first is the default of `compare`.
 pub const BUILTIN_SCENES: &[BuiltinScene] = &[
     BuiltinScene {
         name: "sphereflake",
-        description: "Haines' sphereflake (820 tessellated spheres over four orders of size, 82k triangles) on a ground quad",
-        make: || sphereflake(3, 6, 10),
+        description: "Haines' sphereflake (820 tessellated spheres over four orders of size, 82k triangles) on a ground quad; sized: more levels and finer spheres",
+        default_size: 82_002,
+        make: sphereflake_sized,
         camera: None,
     },
     BuiltinScene {
         name: "random-soup",
         description: "20k random triangles of random size, uniformly spread in a cube: no structure to exploit",
-        make: || random_soup(20_000, 7),
+        default_size: 20_000,
+        make: |n| random_soup(n, 7),
         camera: None,
     },
     BuiltinScene {
         name: "teapot-in-stadium",
-        description: "a 44k-triangle procedural teapot, 5 units wide, in the middle of a stadium 40 times its size (2.6k large triangles), seen from the stands",
-        make: teapot_in_stadium,
+        description: "a 44k-triangle procedural teapot, 5 units wide, in the middle of a stadium 40 times its size (2.6k large triangles), seen from the stands; sized: a finer teapot",
+        default_size: 46_722,
+        make: teapot_in_stadium_sized,
         // A spectator's view: the teapot in the middle of the picture, the far stands behind.
         camera: Some(Camera {
             eye: Vec3::new(0.0, 9.0, 26.0),
@@ -56,6 +118,13 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
             up: Vec3::Y,
             vfov_deg: 40.0,
         }),
+    },
+    BuiltinScene {
+        name: "terrain",
+        description: "a 100k-triangle height field of rolling hills over a unit square: large, even, realistic input for build time and memory",
+        default_size: 100_000,
+        make: height_field,
+        camera: None,
     },
 ];
 
@@ -68,9 +137,10 @@ pub fn camera_for(spec: &str, bounds: &crate::Aabb, width: u32, height: u32) -> 
     }
 }
 
-/// The built-in scene called `name`, if there is one.
-pub fn builtin(name: &str) -> Option<Mesh> {
-    find(name).map(|s| (s.make)())
+/// The built-in scene `spec` asks for (`name` or `name:size`, see [`resolve`]), if it names one
+/// with a valid size.
+pub fn builtin(spec: &str) -> Option<Mesh> {
+    resolve(spec).ok().flatten().map(|(s, n)| s.make(n))
 }
 
 /// A UV sphere with `stacks` bands of latitude and `slices` of longitude
@@ -158,6 +228,22 @@ pub fn sphereflake(levels: u32, stacks: u32, slices: u32) -> Mesh {
     mesh
 }
 
+/// A sphereflake of about `triangles` triangles: the most levels (up to 6) whose spheres can
+/// have 40 triangles each, then each sphere's tessellation chosen to reach the count. At 82,002
+/// triangles this is `sphereflake(3, 6, 10)`, the built-in default.
+pub fn sphereflake_sized(triangles: usize) -> Mesh {
+    let spheres = |levels: u32| (9usize.pow(levels + 1) - 1) / 8;
+    let levels = (0..=6)
+        .rev()
+        .find(|&l| spheres(l) * 40 <= triangles)
+        .unwrap_or(0);
+    let per_sphere = (triangles as f64 / spheres(levels) as f64).max(8.0);
+    // 2 · slices · (stacks - 1) triangles per sphere, with slices = 2 (stacks - 1).
+    let bands = ((per_sphere / 4.0).sqrt().round() as u32).max(1);
+    let slices = ((per_sphere / (2.0 * bands as f64)).round() as u32).max(3);
+    sphereflake(levels, bands + 1, slices)
+}
+
 /// A surface of `along + 1` rings of `around` points, point `f(u, v)` for `u` in `[0, 1]` along
 /// the surface and `v` in `[0, 1)` around it, stitched into quads of two triangles; the rings
 /// close on themselves. `start` and `end` close the first and last ring with a fan to that point.
@@ -240,6 +326,13 @@ fn tube(along: u32, around: u32, path: impl Fn(f32) -> Vec3, radius: impl Fn(f32
 /// one surface of revolution (closed at both poles), a tapering spout and a handle as tubes;
 /// 44k triangles.
 pub fn teapot(base: f32) -> Mesh {
+    teapot_with_detail(base, 1.0)
+}
+
+/// [`teapot`] with every tessellation count multiplied by `detail` (1 is the default, about
+/// 44k triangles; the count grows as `detail²`).
+pub fn teapot_with_detail(base: f32, detail: f32) -> Mesh {
+    let n = |count: u32| ((count as f32 * detail).round() as u32).max(3);
     // (radius, height) from the bottom centre to the knob.
     let profile = [
         (0.9, 0.0),
@@ -258,8 +351,8 @@ pub fn teapot(base: f32) -> Mesh {
         (0.05, 2.03),
     ];
     let mut mesh = swept(
-        96,
-        192,
+        n(96),
+        n(192),
         |u, v| {
             let (r, y) = spline(&profile, u);
             let a = std::f32::consts::TAU * v;
@@ -277,12 +370,12 @@ pub fn teapot(base: f32) -> Mesh {
         let p = a * (1.0 - u) * (1.0 - u) + b * 2.0 * u * (1.0 - u) + c * u * u;
         p + Vec3::Y * base
     };
-    mesh.append(&tube(48, 48, spout, |u| 0.28 - 0.18 * u));
+    mesh.append(&tube(n(48), n(48), spout, |u| 0.28 - 0.18 * u));
     let handle = |u: f32| {
         let a = std::f32::consts::PI * u;
         Vec3::new(-1.4 - 0.65 * a.sin(), base + 0.85 + 0.5 * a.cos(), 0.0)
     };
-    mesh.append(&tube(48, 24, handle, |_| 0.09));
+    mesh.append(&tube(n(48), n(24), handle, |_| 0.09));
     mesh
 }
 
@@ -292,6 +385,22 @@ pub fn teapot(base: f32) -> Mesh {
 /// stands puts the whole teapot into a few cells.
 pub fn teapot_in_stadium() -> Mesh {
     stadium_with_teapot(true)
+}
+
+/// [`teapot_in_stadium`] with about `triangles` triangles: the stadium as it is, and a teapot
+/// tessellated finer or coarser to make up the rest (at least a coarse teapot of about 1k).
+pub fn teapot_in_stadium_sized(triangles: usize) -> Mesh {
+    // The default scene's counts: the stadium alone, and the teapot at detail 1.
+    const STADIUM: usize = 2_562;
+    const TEAPOT: usize = 44_160;
+    let detail = if triangles == STADIUM + TEAPOT {
+        1.0
+    } else {
+        (triangles.saturating_sub(STADIUM).max(1_000) as f64 / TEAPOT as f64).sqrt() as f32
+    };
+    let mut mesh = teapot_with_detail(0.02, detail);
+    mesh.append(&stadium_with_teapot(false));
+    mesh
 }
 
 /// The stadium of [`teapot_in_stadium`], with or without its teapot.
@@ -399,6 +508,71 @@ mod tests {
             assert!(m.triangles().iter().all(|t| t.is_valid()), "{}", s.name);
         }
         assert!(builtin("nope").is_none());
+    }
+
+    #[test]
+    fn sized_scenes_come_close_to_their_size() {
+        for s in BUILTIN_SCENES {
+            // The default size is the bare name's scene, exactly.
+            assert_eq!(
+                s.make(s.default_size).triangles(),
+                builtin(s.name).unwrap().triangles(),
+                "{}",
+                s.name
+            );
+            let count = builtin(s.name).unwrap().triangle_count() as f64;
+            assert!(
+                (count / s.default_size as f64 - 1.0).abs() < 0.01,
+                "{}: {count} triangles",
+                s.name
+            );
+            for n in [5_000, 300_000] {
+                let got = s.make(n).triangle_count() as f64;
+                assert!(
+                    (0.7..1.4).contains(&(got / n as f64)),
+                    "{}:{n} has {got} triangles",
+                    s.name
+                );
+            }
+        }
+        assert_eq!(
+            sphereflake_sized(82_002).triangles(),
+            sphereflake(3, 6, 10).triangles()
+        );
+        assert_eq!(
+            teapot_in_stadium_sized(46_722).triangles(),
+            teapot_in_stadium().triangles()
+        );
+    }
+
+    #[test]
+    fn sizes_parse_or_fail_in_one_line() {
+        let size = |spec: &str| resolve(spec).map(|r| r.map(|(s, n)| (s.name, n)));
+        assert_eq!(
+            size("random-soup:2.5M"),
+            Ok(Some(("random-soup", 2_500_000)))
+        );
+        assert_eq!(size("sphereflake:500k"), Ok(Some(("sphereflake", 500_000))));
+        assert_eq!(size("terrain:1234"), Ok(Some(("terrain", 1234))));
+        assert_eq!(
+            size("teapot-in-stadium"),
+            Ok(Some(("teapot-in-stadium", 46_722)))
+        );
+        assert_eq!(size("nope:10k"), Ok(None));
+        for bad in [
+            "random-soup:",
+            "random-soup:0",
+            "random-soup:-5",
+            "random-soup:1G",
+            "random-soup:101M",
+            "random-soup:NaN",
+            "random-soup:inf",
+            "random-soup:1e400",
+        ] {
+            let err = resolve(bad).unwrap_err();
+            assert!(err.contains(bad) && !err.contains('\n'), "{err}");
+        }
+        assert!(builtin("random-soup:0").is_none());
     }
 
     #[test]

@@ -85,7 +85,10 @@ pub struct Args {
 
 /// The text after `--help`: built-in scenes and structure rows.
 pub fn after_help(entries: &[structures::Entry]) -> String {
-    let mut s = String::from("Built-in scenes:\n");
+    let mut s = String::from(
+        "Built-in scenes (add a size for about that many triangles: `random-soup:10M`, \
+         `terrain:500k`):\n",
+    );
     for b in BUILTIN_SCENES {
         let _ = writeln!(s, "  {:<14} {}", b.name, b.description);
     }
@@ -259,14 +262,15 @@ fn select_entries(
 
 /// The triangles of a built-in scene or an OBJ file, or a one-line error.
 pub fn load_scene(spec: &str) -> Result<(String, Vec<Triangle>), String> {
-    if let Some(mesh) = scenes::builtin(spec) {
-        return Ok((spec.to_string(), mesh.triangles()));
+    if let Some((scene, size)) = scenes::resolve(spec)? {
+        return Ok((spec.to_string(), scene.make(size).triangles()));
     }
     let path = Path::new(spec);
     if !path.exists() && !spec.contains(['/', '\\', '.']) {
         let names: Vec<&str> = BUILTIN_SCENES.iter().map(|s| s.name).collect();
         return Err(format!(
-            "no built-in scene or file named `{spec}` (built-in scenes: {})",
+            "no built-in scene or file named `{spec}` (built-in scenes: {}; any of them with a \
+             size, such as `random-soup:1M`)",
             names.join(", ")
         ));
     }

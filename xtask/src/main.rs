@@ -7,10 +7,17 @@
 //! - `draw`: a slice through a built structure as SVG (see [`draw`]).
 //! - `render`: a Whitted-style picture through any structure, or per-pixel cost heatmaps (see
 //!   [`render`]).
+//! - `scale`: the size ladder, build and trace cost and memory from thousands to millions of
+//!   triangles (see [`scale`]).
 
 mod draw;
 mod explain;
 mod render;
+mod scale;
+
+/// Counts heap bytes in use and their peak, for `scale`'s peak build memory.
+#[global_allocator]
+static ALLOCATOR: rt_shootout::memory::Counting = rt_shootout::memory::Counting;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 use std::process::ExitCode;
@@ -37,6 +44,10 @@ enum Task {
     /// entered with their t intervals, split planes and the side taken first, pushes and pops,
     /// primitives tested and mailbox skips, and the hit, checked against brute force.
     Explain(explain::Args),
+    /// Build and trace each structure on one built-in scene at sizes from thousands to millions
+    /// of triangles: build time per triangle, trace time per ray, bytes per triangle and peak
+    /// build memory, as a table and optionally an SVG chart.
+    Scale(scale::Args),
 }
 
 fn main() -> ExitCode {
@@ -63,6 +74,17 @@ fn main() -> ExitCode {
         },
         Task::Explain(args) => match explain::run(&args) {
             Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        },
+        Task::Scale(args) => match scale::run(&args) {
+            Ok(true) => ExitCode::SUCCESS,
+            Ok(false) => {
+                eprintln!("error: rows disagree with the first row on some rays");
+                ExitCode::from(1)
+            }
             Err(e) => {
                 eprintln!("error: {e}");
                 ExitCode::from(2)

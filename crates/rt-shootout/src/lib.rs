@@ -26,7 +26,9 @@
 pub mod compare;
 pub mod explain;
 pub mod grade;
+pub mod memory;
 pub mod report;
+pub mod scale;
 pub mod structures;
 
 pub use compare::{Args, Report, Row};

@@ -118,6 +118,21 @@ fn chart_error(file: &Path, e: impl std::fmt::Display) -> String {
     format!("{}: cannot draw chart: {e}", file.display())
 }
 
+/// Draws a chart's series labels, boxed, at `position`.
+fn legend<'a, CT: CoordTranslate>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, CT>,
+    position: SeriesLabelPosition,
+    path: &Path,
+) -> Result<(), String> {
+    chart
+        .configure_series_labels()
+        .border_style(BLACK)
+        .background_style(WHITE.mix(0.8))
+        .position(position)
+        .draw()
+        .map_err(|e| chart_error(path, e))
+}
+
 /// The structure rows every report shows (brute force is the tables' baseline, not charted).
 fn structure_rows(report: &Report) -> Vec<&Row> {
     report
@@ -193,13 +208,7 @@ fn bar_chart(path: &Path, metric: &Figure, reports: &[Report]) -> Result<(), Str
             .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 12, y + 5)], color.filled()));
     }
     if reports.len() > 1 {
-        chart
-            .configure_series_labels()
-            .border_style(BLACK)
-            .background_style(WHITE.mix(0.8))
-            .position(SeriesLabelPosition::UpperRight)
-            .draw()
-            .map_err(|e| chart_error(path, e))?;
+        legend(&mut chart, SeriesLabelPosition::UpperRight, path)?;
     }
     root.present().map_err(|e| chart_error(path, e))
 }
@@ -267,13 +276,7 @@ fn model_chart(
             .label(scene_label(&rep.scene))
             .legend(move |(x, y)| Circle::new((x + 6, y), 4, color.filled()));
     }
-    chart
-        .configure_series_labels()
-        .border_style(BLACK)
-        .background_style(WHITE.mix(0.8))
-        .position(SeriesLabelPosition::UpperLeft)
-        .draw()
-        .map_err(|e| chart_error(path, e))?;
+    legend(&mut chart, SeriesLabelPosition::UpperLeft, path)?;
     root.present().map_err(|e| chart_error(path, e))
 }
 
@@ -430,4 +433,105 @@ pub fn write(
     let path = dir.join("report.md");
     std::fs::write(&path, md).map_err(|e| format!("{}: cannot write: {e}", path.display()))?;
     Ok(path)
+}
+
+/// A log axis's label at `v`: only at 1, 2 and 5 times a power of ten (the axis marks every
+/// tick), with `k` and `M` for counts.
+fn log_label(v: f64, count: bool) -> String {
+    if v.is_nan() || v <= 0.0 {
+        return String::new();
+    }
+    let power = 10f64.powf(v.log10().floor());
+    let m = v / power;
+    if ![1.0, 2.0, 5.0].iter().any(|n| (m - n).abs() < 0.01) {
+        return String::new();
+    }
+    match v {
+        _ if count && v >= 1e6 => format!("{}M", v / 1e6),
+        _ if count && v >= 1e3 => format!("{}k", v / 1e3),
+        _ if v >= 1.0 => format!("{v:.0}"),
+        _ => format!("{v}"),
+    }
+}
+
+/// `scale`'s four curves against size, log-log, one line per row: build time per triangle,
+/// trace time per ray, structure bytes per triangle, and the build's peak heap.
+pub(crate) fn scale_chart(path: &Path, report: &crate::scale::ScaleReport) -> Result<(), String> {
+    type Metric = fn(&crate::scale::Point) -> Option<f64>;
+    let panels: [(&str, Metric); 4] = [
+        ("build ns per triangle", |p| Some(p.build_ns_per_triangle())),
+        ("trace ns per primary ray", |p| Some(p.trace_ns_per_ray)),
+        ("structure bytes per triangle", |p| {
+            Some(p.bytes_per_triangle())
+        }),
+        ("peak build heap, MiB", |p| {
+            p.peak_build_bytes.map(|b| b as f64 / (1024.0 * 1024.0))
+        }),
+    ];
+    let mut names: Vec<&str> = Vec::new();
+    for p in &report.points {
+        if !names.contains(&p.structure.as_str()) {
+            names.push(&p.structure);
+        }
+    }
+    let sizes = report.points.iter().map(|p| p.triangles as f64);
+    let (x_lo, x_hi) = (
+        sizes.clone().fold(f64::INFINITY, f64::min) / 1.3,
+        sizes.fold(0.0f64, f64::max) * 1.3,
+    );
+    let root = SVGBackend::new(path, (1100, 820)).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| chart_error(path, e))?;
+    let root = root
+        .titled(
+            &format!(
+                "scale ladder on {}, {} threads",
+                report.scene, report.threads
+            ),
+            ("sans-serif", 20),
+        )
+        .map_err(|e| chart_error(path, e))?;
+    for (area, (title, metric)) in root.split_evenly((2, 2)).iter().zip(panels) {
+        let values: Vec<f64> = report.points.iter().filter_map(metric).collect();
+        let y_lo = values.iter().copied().fold(f64::INFINITY, f64::min);
+        let y_hi = values.iter().copied().fold(0.0f64, f64::max);
+        if values.is_empty() || y_lo.is_nan() || y_lo <= 0.0 || !y_hi.is_finite() {
+            continue;
+        }
+        let mut chart = ChartBuilder::on(area)
+            .caption(title, ("sans-serif", 15))
+            .margin(12)
+            .x_label_area_size(36)
+            .y_label_area_size(56)
+            .build_cartesian_2d(
+                (x_lo..x_hi).log_scale(),
+                (y_lo / 1.5..y_hi * 1.5).log_scale(),
+            )
+            .map_err(|e| chart_error(path, e))?;
+        chart
+            .configure_mesh()
+            .x_desc("triangles")
+            .x_label_formatter(&|x| log_label(*x, true))
+            .y_label_formatter(&|y| log_label(*y, false))
+            .draw()
+            .map_err(|e| chart_error(path, e))?;
+        for (i, name) in names.iter().enumerate() {
+            let color = PALETTE[i % PALETTE.len()];
+            let line: Vec<(f64, f64)> = report
+                .points
+                .iter()
+                .filter(|p| p.structure == *name)
+                .filter_map(|p| metric(p).map(|v| (p.triangles as f64, v)))
+                .collect();
+            chart
+                .draw_series(LineSeries::new(line.clone(), color.stroke_width(2)))
+                .map_err(|e| chart_error(path, e))?
+                .label(*name)
+                .legend(move |(x, y)| PathElement::new([(x, y), (x + 14, y)], color));
+            chart
+                .draw_series(line.iter().map(|&p| Circle::new(p, 3, color.filled())))
+                .map_err(|e| chart_error(path, e))?;
+        }
+        legend(&mut chart, SeriesLabelPosition::UpperLeft, path)?;
+    }
+    root.present().map_err(|e| chart_error(path, e))
 }

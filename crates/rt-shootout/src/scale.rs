@@ -1,0 +1,345 @@
+//! The scale ladder: each structure built and traced on one built-in scene at sizes from
+//! thousands to millions of triangles, so that an `O(N log N)` build, a logarithmic trace and a
+//! super-linear one can be told apart.
+//!
+//! Per size and row: build time per triangle, trace time per primary ray, the structure's bytes
+//! per triangle ([`Accel::memory_bytes`](rt_core::Accel::memory_bytes)), and the heap peak of the
+//! build (with [`crate::memory::Counting`] installed as the global allocator; `cargo xtask scale`
+//! installs it). The peak is split into the finished structure and the build's scratch: the
+//! ratio `scratch / (structure + input)` is at most 1 for a build whose temporary memory stays
+//! within what it produces and what it was given. Answers are checked against the first row on
+//! a sample of the rays (brute force is too slow at millions of triangles).
+
+use crate::memory;
+use crate::structures::{self, Entry, Query};
+use rt_core::{Hit, Triangle, scenes};
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// Flags of `cargo xtask scale`.
+#[derive(clap::Args, Debug, Clone)]
+pub struct ScaleArgs {
+    /// The built-in scene kind the ladder sizes (`terrain`, `random-soup`, `sphereflake`,
+    /// `teapot-in-stadium`).
+    #[arg(long, default_value = "terrain")]
+    pub scene: String,
+    /// Comma-separated rows (as `compare` names them).
+    #[arg(long, default_value = "bvh,kdtree,grid,hgrid,octree")]
+    pub structures: String,
+    /// The smallest size, in triangles (`10k`, `1M`, ...).
+    #[arg(long, default_value = "10k")]
+    pub min: String,
+    /// The largest size: the ladder goes up by 1, 3, 10, 30, ... times a power of ten to here.
+    #[arg(long, default_value = "1M")]
+    pub max: String,
+    /// Primary rays per size: width.
+    #[arg(long, default_value_t = 256)]
+    pub width: u32,
+    /// Primary rays per size: height.
+    #[arg(long, default_value_t = 192)]
+    pub height: u32,
+    /// Threads for building and tracing [default: all cores].
+    #[arg(long)]
+    pub threads: Option<usize>,
+    /// Also write the four curves (build, trace, bytes, peak memory against size) as SVG here.
+    #[arg(long)]
+    pub svg: Option<PathBuf>,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// One row at one size.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Point {
+    /// The row's name.
+    pub structure: String,
+    /// Triangles in the scene.
+    pub triangles: usize,
+    /// Build time, milliseconds.
+    pub build_ms: f64,
+    /// Trace time per primary ray, nanoseconds (wall time on all threads).
+    pub trace_ns_per_ray: f64,
+    /// The structure's bytes.
+    pub structure_bytes: usize,
+    /// The heap peak during the build, above what was in use before it; `None` without the
+    /// counting allocator.
+    pub peak_build_bytes: Option<usize>,
+    /// Rays of the sample whose answer differs from the first row's.
+    pub disagreements: usize,
+}
+
+impl Point {
+    /// Build nanoseconds per triangle.
+    pub fn build_ns_per_triangle(&self) -> f64 {
+        self.build_ms * 1e6 / self.triangles as f64
+    }
+
+    /// Structure bytes per triangle.
+    pub fn bytes_per_triangle(&self) -> f64 {
+        self.structure_bytes as f64 / self.triangles as f64
+    }
+
+    /// The build's scratch memory (peak minus the finished structure) over structure plus input
+    /// (the triangles, 36 bytes each): at most 1 when the build stays within that bound.
+    pub fn scratch_ratio(&self) -> Option<f64> {
+        let input = self.triangles * size_of::<Triangle>();
+        self.peak_build_bytes.map(|peak| {
+            peak.saturating_sub(self.structure_bytes) as f64 / (self.structure_bytes + input) as f64
+        })
+    }
+}
+
+/// The whole ladder.
+#[derive(Clone, Debug)]
+pub struct ScaleReport {
+    /// The scene kind.
+    pub scene: String,
+    /// Threads used.
+    pub threads: usize,
+    /// Primary rays traced per size.
+    pub rays: usize,
+    /// Every row at every size, smallest size first.
+    pub points: Vec<Point>,
+}
+
+/// The sizes from `min` to `max`: 1 and 3 times each power of ten in between, and `max`.
+pub fn ladder(min: usize, max: usize) -> Vec<usize> {
+    let mut out = Vec::new();
+    let mut decade = 1usize;
+    while decade <= max {
+        for k in [1, 3] {
+            let n = decade * k;
+            if (min..max).contains(&n) {
+                out.push(n);
+            }
+        }
+        decade = decade.saturating_mul(10);
+        if decade == usize::MAX {
+            break;
+        }
+    }
+    out.push(max);
+    out
+}
+
+/// A size flag's value: a triangle count such as `10k` or `3M`.
+fn size(flag: &str, value: &str) -> Result<usize, String> {
+    match scenes::resolve(&format!("terrain:{value}")) {
+        Ok(Some((_, n))) => Ok(n),
+        _ => Err(format!(
+            "{flag} {value}: expected a triangle count from 1 to 100M, such as 10k or 3M"
+        )),
+    }
+}
+
+/// How many rays of each size are checked against the first row.
+const CHECKED: usize = 2000;
+
+/// Runs the ladder over `entries`.
+///
+/// # Errors
+/// A one-line description of a bad flag (unknown scene or row, malformed size).
+pub fn scale(args: &ScaleArgs, entries: &[Entry]) -> Result<ScaleReport, String> {
+    let kind = scenes::find(&args.scene)
+        .filter(|_| !args.scene.contains(':'))
+        .ok_or_else(|| {
+            let names: Vec<&str> = scenes::BUILTIN_SCENES.iter().map(|s| s.name).collect();
+            format!(
+                "--scene {}: scale sizes a built-in scene kind, one of {}",
+                args.scene,
+                names.join(", ")
+            )
+        })?;
+    let (min, max) = (size("--min", &args.min)?, size("--max", &args.max)?);
+    if min > max {
+        return Err(format!("--min {} is above --max {}", args.min, args.max));
+    }
+    if args.width == 0 || args.height == 0 || args.width > 1 << 13 || args.height > 1 << 13 {
+        return Err(format!(
+            "--width {} --height {}: each must be 1 to 8192",
+            args.width, args.height
+        ));
+    }
+    let rows: Vec<Entry> = args
+        .structures
+        .split(',')
+        .map(|name| structures::find(entries, name.trim()))
+        .collect::<Result<_, _>>()?;
+    let mut pool = rayon::ThreadPoolBuilder::new();
+    if let Some(t) = args.threads {
+        pool = pool.num_threads(t.max(1));
+    }
+    let pool = pool.build().map_err(|e| format!("thread pool: {e}"))?;
+    let mut points = Vec::new();
+    for n in ladder(min, max) {
+        let mesh = kind.make(n);
+        let tris = mesh.triangles();
+        let bounds = mesh.bounds();
+        drop(mesh);
+        let rays = kind
+            .camera(&bounds, args.width, args.height)
+            .primary_rays(args.width, args.height);
+        let sample: Vec<_> = rays
+            .iter()
+            .step_by((rays.len() / CHECKED).max(1))
+            .copied()
+            .collect();
+        let mut reference: Option<Vec<Option<Hit>>> = None;
+        for row in &rows {
+            let before = memory::reset_peak();
+            let start = Instant::now();
+            let built = pool.install(|| (row.build)(&tris));
+            let build_ms = start.elapsed().as_secs_f64() * 1e3;
+            let peak = memory::peak().zip(before).map(|(p, b)| p.saturating_sub(b));
+            // The checked sample first: it also warms the caches and the pool's threads.
+            let (answers, _) = pool.install(|| built.trace_counted(&sample, Query::Closest));
+            let start = Instant::now();
+            std::hint::black_box(pool.install(|| built.trace_timed(&rays, Query::Closest)));
+            let trace_ns_per_ray = start.elapsed().as_secs_f64() * 1e9 / rays.len() as f64;
+            let disagreements = match &reference {
+                None => {
+                    reference = Some(answers);
+                    0
+                }
+                Some(r) => r
+                    .iter()
+                    .zip(&answers)
+                    .filter(|(a, b)| !Hit::agree(**a, **b))
+                    .count(),
+            };
+            points.push(Point {
+                structure: row.name.clone(),
+                triangles: tris.len(),
+                build_ms,
+                trace_ns_per_ray,
+                structure_bytes: built.memory_bytes(),
+                peak_build_bytes: peak,
+                disagreements,
+            });
+        }
+    }
+    Ok(ScaleReport {
+        scene: kind.name.to_string(),
+        threads: pool.current_num_threads(),
+        rays: (args.width * args.height) as usize,
+        points,
+    })
+}
+
+fn mib(bytes: usize) -> f64 {
+    bytes as f64 / (1024.0 * 1024.0)
+}
+
+impl ScaleReport {
+    /// The ladder as a table, one line per row and size.
+    pub fn table(&self) -> String {
+        let mut s = format!(
+            "scale ladder on {} ({} threads, {} primary rays per size; answers checked against \
+             the first row on {CHECKED} of them)\n",
+            self.scene, self.threads, self.rays
+        );
+        let _ = writeln!(
+            s,
+            "{:>10} {:<12} {:>9} {:>8} {:>9} {:>9} {:>10} {:>10} {:>9} {:>6}",
+            "triangles",
+            "structure",
+            "build ms",
+            "ns/tri",
+            "ns/ray",
+            "bytes/tri",
+            "struct MiB",
+            "peak MiB",
+            "scratch×",
+            "differ"
+        );
+        for p in &self.points {
+            let peak = p
+                .peak_build_bytes
+                .map_or("n/a".to_string(), |b| format!("{:.1}", mib(b)));
+            let scratch = p
+                .scratch_ratio()
+                .map_or("n/a".to_string(), |r| format!("{r:.2}"));
+            let _ = writeln!(
+                s,
+                "{:>10} {:<12} {:>9.1} {:>8.1} {:>9.1} {:>9.1} {:>10.1} {:>10} {:>9} {:>6}",
+                p.triangles,
+                p.structure,
+                p.build_ms,
+                p.build_ns_per_triangle(),
+                p.trace_ns_per_ray,
+                p.bytes_per_triangle(),
+                mib(p.structure_bytes),
+                peak,
+                scratch,
+                p.disagreements
+            );
+        }
+        s.push_str(
+            "scratch× = (peak - structure) / (structure + input triangles): at most 1 when the \
+             build's temporary memory stays within what it produces and what it is given\n",
+        );
+        s
+    }
+
+    /// The ladder as one JSON object.
+    pub fn json(&self) -> String {
+        let points: Vec<serde_json::Value> = self
+            .points
+            .iter()
+            .map(|p| {
+                serde_json::json!({
+                    "structure": p.structure,
+                    "triangles": p.triangles,
+                    "build_ms": p.build_ms,
+                    "build_ns_per_triangle": p.build_ns_per_triangle(),
+                    "trace_ns_per_ray": p.trace_ns_per_ray,
+                    "structure_bytes": p.structure_bytes,
+                    "bytes_per_triangle": p.bytes_per_triangle(),
+                    "peak_build_bytes": p.peak_build_bytes,
+                    "scratch_ratio": p.scratch_ratio(),
+                    "disagreements": p.disagreements,
+                })
+            })
+            .collect();
+        serde_json::json!({
+            "scene": self.scene,
+            "threads": self.threads,
+            "rays": self.rays,
+            "points": points,
+        })
+        .to_string()
+    }
+
+    /// The total of rays, over every size and row after the first, whose answer differed from
+    /// the first row's.
+    pub fn disagreements(&self) -> usize {
+        self.points.iter().map(|p| p.disagreements).sum()
+    }
+
+    /// Writes the four curves against size, log-log, one line per row, as SVG.
+    ///
+    /// # Errors
+    /// A one-line description of a file that cannot be written.
+    pub fn svg(&self, path: &Path) -> Result<(), String> {
+        crate::report::scale_chart(path, self)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_ladder_goes_up_by_one_and_three_times_powers_of_ten() {
+        assert_eq!(
+            ladder(10_000, 10_000_000),
+            [
+                10_000, 30_000, 100_000, 300_000, 1_000_000, 3_000_000, 10_000_000
+            ]
+        );
+        assert_eq!(ladder(5_000, 50_000), [10_000, 30_000, 50_000]);
+        assert_eq!(ladder(7, 7), [7]);
+    }
+}

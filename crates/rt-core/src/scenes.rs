@@ -46,6 +46,26 @@ pub fn find(spec: &str) -> Option<&'static BuiltinScene> {
     BUILTIN_SCENES.iter().find(|s| s.name == name)
 }
 
+/// A triangle count as scenes and `scale` take it: digits with an optional `k` (thousand) or `M`
+/// (million) suffix, such as `20000`, `500k` or `2.5M`, from 1 to [`MAX_SIZE`]; `None` otherwise.
+///
+/// ```
+/// use rt_core::scenes::parse_size;
+/// assert_eq!(parse_size("2.5M"), Some(2_500_000));
+/// assert_eq!(parse_size("0"), None);
+/// ```
+pub fn parse_size(text: &str) -> Option<usize> {
+    let (digits, unit) = match text.strip_suffix(['k', 'K']) {
+        Some(d) => (d, 1e3),
+        None => match text.strip_suffix(['m', 'M']) {
+            Some(d) => (d, 1e6),
+            None => (text, 1.0),
+        },
+    };
+    let n = (digits.parse::<f64>().ok()? * unit).round();
+    (n.is_finite() && (1.0..=MAX_SIZE as f64).contains(&n)).then_some(n as usize)
+}
+
 /// The built-in scene and triangle count `spec` asks for: `name` (the scene's default size) or
 /// `name:size`, where size is a count with an optional `k` (thousand) or `M` (million) suffix,
 /// such as `20000`, `500k` or `2.5M`, from 1 to [`MAX_SIZE`]. `Ok(None)` when `spec` names no
@@ -69,20 +89,8 @@ pub fn resolve(spec: &str) -> Result<Option<(&'static BuiltinScene, usize)>, Str
     let Some((_, size)) = spec.split_once(':') else {
         return Ok(Some((scene, scene.default_size)));
     };
-    let (digits, unit) = match size.strip_suffix(['k', 'K']) {
-        Some(d) => (d, 1e3),
-        None => match size.strip_suffix(['m', 'M']) {
-            Some(d) => (d, 1e6),
-            None => (size, 1.0),
-        },
-    };
-    let count = digits
-        .parse::<f64>()
-        .ok()
-        .map(|n| (n * unit).round())
-        .filter(|n| n.is_finite() && *n >= 1.0 && *n <= MAX_SIZE as f64);
-    match count {
-        Some(n) => Ok(Some((scene, n as usize))),
+    match parse_size(size) {
+        Some(n) => Ok(Some((scene, n))),
         None => Err(format!(
             "scene `{spec}`: the size must be a triangle count from 1 to 100M, such as 20000, \
              500k or 2.5M"
@@ -393,11 +401,9 @@ pub fn teapot_in_stadium_sized(triangles: usize) -> Mesh {
     // The default scene's counts: the stadium alone, and the teapot at detail 1.
     const STADIUM: usize = 2_562;
     const TEAPOT: usize = 44_160;
-    let detail = if triangles == STADIUM + TEAPOT {
-        1.0
-    } else {
-        (triangles.saturating_sub(STADIUM).max(1_000) as f64 / TEAPOT as f64).sqrt() as f32
-    };
+    // At the default count this is exactly 1.0: the default scene, triangle for triangle.
+    let detail =
+        (triangles.saturating_sub(STADIUM).max(1_000) as f64 / TEAPOT as f64).sqrt() as f32;
     let mut mesh = teapot_with_detail(0.02, detail);
     mesh.append(&stadium_with_teapot(false));
     mesh

@@ -106,32 +106,20 @@ pub struct ScaleReport {
 
 /// The sizes from `min` to `max`: 1 and 3 times each power of ten in between, and `max`.
 pub fn ladder(min: usize, max: usize) -> Vec<usize> {
-    let mut out = Vec::new();
-    let mut decade = 1usize;
-    while decade <= max {
-        for k in [1, 3] {
-            let n = decade * k;
-            if (min..max).contains(&n) {
-                out.push(n);
-            }
-        }
-        decade = decade.saturating_mul(10);
-        if decade == usize::MAX {
-            break;
-        }
-    }
+    let mut out: Vec<usize> = std::iter::successors(Some(1usize), |d| d.checked_mul(10))
+        .take_while(|&d| d <= max)
+        .flat_map(|d| [d, d.saturating_mul(3)])
+        .filter(|n| (min..max).contains(n))
+        .collect();
     out.push(max);
     out
 }
 
 /// A size flag's value: a triangle count such as `10k` or `3M`.
 fn size(flag: &str, value: &str) -> Result<usize, String> {
-    match scenes::resolve(&format!("terrain:{value}")) {
-        Ok(Some((_, n))) => Ok(n),
-        _ => Err(format!(
-            "{flag} {value}: expected a triangle count from 1 to 100M, such as 10k or 3M"
-        )),
-    }
+    scenes::parse_size(value).ok_or_else(|| {
+        format!("{flag} {value}: expected a triangle count from 1 to 100M, such as 10k or 3M")
+    })
 }
 
 /// How many rays of each size are checked against the first row.

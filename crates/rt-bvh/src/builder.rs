@@ -1136,6 +1136,10 @@ fn emit_wide<P: Primitive>(
                 let mut sh = Shape::default();
                 let start = k.set.start;
                 let c = emit_wide(ctx, slice, start, k, &mut o, &mut sh, &mut Scratch::new());
+                // The arrays grew by doubling, and all eight wait to be appended: their slack
+                // would add up to as much as the subtrees again.
+                o.nodes.shrink_to_fit();
+                o.packs.shrink_to_fit();
                 (c, o, sh)
             })
             .collect();

@@ -111,7 +111,7 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
         name: "random-soup",
         description: "20k random triangles of random size, uniformly spread in a cube: no structure to exploit",
         default_size: 20_000,
-        make: |n| random_soup(n, 7),
+        make: |n| random_soup_sized(n, 7),
         camera: None,
     },
     BuiltinScene {
@@ -485,11 +485,24 @@ pub fn height_field(triangles: usize) -> Mesh {
 /// `count` random triangles with random orientation, edge lengths up to a tenth of the unit
 /// cube they fill.
 pub fn random_soup(count: usize, seed: u64) -> Mesh {
+    soup(count, seed, 1.0)
+}
+
+/// The `random-soup` scene at `count` triangles: [`random_soup`] at 20,000 (the scene's default),
+/// and at other counts triangles scaled by `(20000 / count)^(1/3)`, so that a triangle overlaps
+/// about as many others at every count (the number of centres in a triangle-sized box stays the
+/// same). With a fixed size, ten million triangles would overlap each other hundreds of times
+/// over, and a scale ladder would measure that crowding rather than the structures.
+pub fn random_soup_sized(count: usize, seed: u64) -> Mesh {
+    soup(count, seed, (20_000.0 / count.max(1) as f64).cbrt() as f32)
+}
+
+fn soup(count: usize, seed: u64, scale: f32) -> Mesh {
     let mut rng = Rng::new(seed);
     let mut positions = Vec::with_capacity(3 * count);
     for _ in 0..count {
         let c = rng.in_box(Vec3::ZERO, Vec3::ONE);
-        let size = rng.range(0.005, 0.1);
+        let size = rng.range(0.005, 0.1) * scale;
         for _ in 0..3 {
             positions.push(c + rng.unit_vector() * size);
         }

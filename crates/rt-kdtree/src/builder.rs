@@ -80,15 +80,25 @@ impl Event {
     }
 }
 
+/// The events of primitive `prim` on `axis`, whose part in the cell is `b`: a start and an end,
+/// or one planar event where the part is flat on that axis.
+fn events(prim: u32, b: &Aabb, axis: usize) -> impl Iterator<Item = Event> {
+    let (lo, hi) = (b.min[axis], b.max[axis]);
+    let pair = if lo == hi {
+        [Some(Event::new(lo, PLANAR, prim)), None]
+    } else {
+        [
+            Some(Event::new(lo, START, prim)),
+            Some(Event::new(hi, END, prim)),
+        ]
+    };
+    pair.into_iter().flatten()
+}
+
 /// Appends the events of primitive `prim`, whose part in the cell is `b`.
 fn push_events(lists: &mut [Vec<Event>; 3], prim: u32, b: &Aabb) {
     for (axis, list) in lists.iter_mut().enumerate() {
-        if b.min[axis] == b.max[axis] {
-            list.push(Event::new(b.min[axis], PLANAR, prim));
-        } else {
-            list.push(Event::new(b.min[axis], START, prim));
-            list.push(Event::new(b.max[axis], END, prim));
-        }
+        list.extend(events(prim, b, axis));
     }
 }
 
@@ -111,14 +121,6 @@ impl Task {
     #[inline]
     fn axis_events<'a>(&self, arena: &'a [Event], axis: usize) -> &'a [Event] {
         &arena[self.bounds[axis]..self.bounds[axis + 1]]
-    }
-
-    /// The task with its events moved from `arena` to a new arena of their own.
-    fn detach(mut self, arena: &[Event]) -> (Self, Vec<Event>) {
-        let own = arena[self.bounds[0]..self.bounds[3]].to_vec();
-        let base = self.bounds[0];
-        self.bounds = self.bounds.map(|b| b - base);
-        (self, own)
     }
 }
 
@@ -240,26 +242,47 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &KdParams) -> Built {
     }
     let ctx = Ctx::new(prims, params, ids.len());
     // The scene box is the union of the primitives' bounds, so every valid primitive meets it and
-    // its part in it is its whole bounds.
-    let mut lists: [Vec<Event>; 3] = Default::default();
+    // its part in it is its whole bounds. The three lists are written straight into one arena of
+    // exactly their size: pushing to growing lists and joining them would hold up to three
+    // times the events at once, 48 bytes per triangle each.
+    let mut sizes = [0usize; 3];
     for &id in &ids {
-        push_events(&mut lists, id, &prims[id as usize].bounds());
-    }
-    if ctx.parallel && ids.len() >= PARALLEL_MIN_REFS {
-        use rayon::slice::ParallelSliceMut;
-        for list in &mut lists {
-            list.par_sort_unstable();
-        }
-    } else {
-        for list in &mut lists {
-            list.sort_unstable();
+        let b = prims[id as usize].bounds();
+        for (axis, size) in sizes.iter_mut().enumerate() {
+            *size += if b.min[axis] == b.max[axis] { 1 } else { 2 };
         }
     }
-    let (nx, ny) = (lists[0].len(), lists[1].len());
-    let mut arena = lists.concat();
+    let (nx, ny) = (sizes[0], sizes[1]);
+    let mut arena = vec![Event::ZERO; nx + ny + sizes[2]];
+    let mut at = [0, nx, nx + ny];
+    for &id in &ids {
+        let b = prims[id as usize].bounds();
+        for (axis, at) in at.iter_mut().enumerate() {
+            for e in events(id, &b, axis) {
+                arena[*at] = e;
+                *at += 1;
+            }
+        }
+    }
+    let count = ids.len();
+    drop(ids);
+    {
+        let (x, rest) = arena.split_at_mut(nx);
+        let (y, z) = rest.split_at_mut(ny);
+        if ctx.parallel && count >= PARALLEL_MIN_REFS {
+            use rayon::slice::ParallelSliceMut;
+            for list in [x, y, z] {
+                list.par_sort_unstable();
+            }
+        } else {
+            for list in [x, y, z] {
+                list.sort_unstable();
+            }
+        }
+    }
     let root = Task {
         bounds: [0, nx, nx + ny, arena.len()],
-        count: ids.len(),
+        count,
         cell: bounds,
         depth: 0,
         bad_refines: 0,
@@ -276,10 +299,14 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &KdParams) -> Built {
 /// the right child's. Parallel subtrees are built into their own buffers and appended in the same
 /// order, so the output does not depend on threading.
 ///
-/// The task's events are the top of `arena`, a stack (whose logical top is the current task's
-/// end; the vector itself only grows): a split replaces them with the children's (right below
-/// left), the left subtree is built on top, then the right one. So a sequential build allocates
-/// nothing per node, and the events in use stay in cache.
+/// The events of a small task are the top of `arena`, a stack (whose logical top is the current
+/// task's end; the vector itself only grows): a split replaces them with the children's (right
+/// below left), the left subtree is built on top, then the right one. So a sequential build
+/// allocates nothing per node, and the events in use stay in cache. A large task (at least
+/// [`PARALLEL_MIN_REFS`] references) that is partitioned writes its children's events to two
+/// new lists of their own instead and frees its own, whether or not the two are then built in
+/// parallel. So the build holds the events of the tasks on its current paths and of their
+/// waiting siblings, about the root's events again, and never a stack of ancestors' lists.
 fn build_into<P: Primitive>(
     ctx: &Ctx<'_, P>,
     task: Task,
@@ -288,7 +315,8 @@ fn build_into<P: Primitive>(
     arena: &mut Vec<Event>,
 ) {
     out.max_depth = out.max_depth.max(task.depth as usize);
-    let Some((left, right, axis, pos)) = split(ctx, &task, arena) else {
+    let detach = task.count >= PARALLEL_MIN_REFS;
+    let Some((children, axis, pos)) = split(ctx, &task, arena, detach) else {
         make_leaf(&task, arena, slot, out);
         return;
     };
@@ -297,19 +325,34 @@ fn build_into<P: Primitive>(
     out.nodes[slot] = Node::interior(axis, pos, first);
     out.nodes.push(Node::leaf(0, 0));
     out.nodes.push(Node::leaf(0, 0));
-    if ctx.parallel && left.count + right.count >= PARALLEL_MIN_REFS {
-        let (left, mut larena) = left.detach(arena);
-        let (right, mut rarena) = right.detach(arena);
-        let (l, r) = rayon::join(
-            || subtree(ctx, left, &mut larena),
-            || subtree(ctx, right, &mut rarena),
-        );
-        append(out, first, l);
-        append(out, first + 1, r);
-    } else {
-        // The left subtree only writes above the right child's events.
-        build_into(ctx, left, first, out, arena);
-        build_into(ctx, right, first + 1, out, arena);
+    match children {
+        Children::InPlace(left, right) => {
+            // The left subtree only writes above the right child's events.
+            build_into(ctx, left, first, out, arena);
+            build_into(ctx, right, first + 1, out, arena);
+        }
+        Children::Detached((left, mut larena), (right, mut rarena)) => {
+            // The task's events are the top of the arena; below them lie the events of tasks
+            // still waiting, if any (a large task's arena is its own, so usually none).
+            arena.truncate(task.bounds[0]);
+            if arena.is_empty() {
+                *arena = Vec::new();
+            }
+            if ctx.parallel {
+                let (l, r) = rayon::join(
+                    || subtree(ctx, left, larena),
+                    || subtree(ctx, right, rarena),
+                );
+                out.nodes.reserve_exact(l.nodes.len() + r.nodes.len() - 2);
+                out.refs.reserve_exact(l.refs.len() + r.refs.len());
+                append(out, first, l);
+                append(out, first + 1, r);
+            } else {
+                build_into(ctx, left, first, out, &mut larena);
+                drop(larena);
+                build_into(ctx, right, first + 1, out, &mut rarena);
+            }
+        }
     }
 }
 
@@ -320,6 +363,12 @@ fn make_leaf(task: &Task, arena: &[Event], slot: usize, out: &mut Built) {
         "a kd-tree holds at most 2^30 primitive references"
     );
     out.nodes[slot] = Node::leaf(first, task.count);
+    out.leaves += 1;
+    out.empty_leaves += usize::from(task.count == 0);
+    if task.count == 0 {
+        // An empty child of a cut may come after its full sibling has freed the arena.
+        return;
+    }
     // Each primitive has exactly one start or planar event on every axis; list them in index
     // order, so the leaf does not depend on event order.
     out.refs.extend(
@@ -329,16 +378,19 @@ fn make_leaf(task: &Task, arena: &[Event], slot: usize, out: &mut Built) {
             .map(|e| e.prim() as u32),
     );
     out.refs[first..].sort_unstable();
-    out.leaves += 1;
-    out.empty_leaves += usize::from(task.count == 0);
 }
 
-fn subtree<P: Primitive>(ctx: &Ctx<'_, P>, task: Task, arena: &mut Vec<Event>) -> Built {
+fn subtree<P: Primitive>(ctx: &Ctx<'_, P>, task: Task, mut arena: Vec<Event>) -> Built {
     let mut out = Built {
         nodes: vec![Node::leaf(0, 0)],
         ..Built::default()
     };
-    build_into(ctx, task, 0, &mut out, arena);
+    build_into(ctx, task, 0, &mut out, &mut arena);
+    drop(arena);
+    // The vectors grew by doubling; the caller copies them into its own at once, and the slack
+    // of both halves of a large tree would otherwise add up to the tree's size again.
+    out.nodes.shrink_to_fit();
+    out.refs.shrink_to_fit();
     out
 }
 
@@ -363,28 +415,39 @@ fn append(out: &mut Built, slot: usize, sub: Built) {
     out.empty_leaves += sub.empty_leaves;
 }
 
-/// Splits `task` into its two children, whose events replace its own at the top of `arena`, or
-/// returns `None` when it should be a leaf.
+/// A task's two children: with their events at the top of the parent's arena, or each with a
+/// list of its own.
+enum Children {
+    InPlace(Task, Task),
+    Detached((Task, Vec<Event>), (Task, Vec<Event>)),
+}
+
+/// Splits `task` into its two children, or returns `None` when it should be a leaf. The
+/// children's events replace the task's at the top of `arena`, unless the task is partitioned
+/// and `detach` asks for lists of their own. (A cut that leaves one side empty moves no event:
+/// the other child keeps the task's events where they are.)
 fn split<P: Primitive>(
     ctx: &Ctx<'_, P>,
     task: &Task,
     arena: &mut Vec<Event>,
-) -> Option<(Task, Task, usize, f32)> {
+    detach: bool,
+) -> Option<(Children, usize, f32)> {
     if !may_split(ctx, task.count, task.depth) {
         return None;
     }
     if let Some(plane) = empty_space(ctx, task, arena) {
         let (left, right) = cut_empty(task, plane, task.bad_refines);
-        return Some((left, right, plane.axis, plane.pos));
+        return Some((Children::InPlace(left, right), plane.axis, plane.pos));
     }
     let plane = best_plane(ctx, task, arena)?;
     let bad_refines = accept(ctx, task.count, task.bad_refines, &plane)?;
-    let (left, right) = if plane.left_count == 0 || plane.right_count == 0 {
-        cut_empty(task, plane, bad_refines)
+    let children = if plane.left_count == 0 || plane.right_count == 0 {
+        let (left, right) = cut_empty(task, plane, bad_refines);
+        Children::InPlace(left, right)
     } else {
-        SCRATCH.with_borrow_mut(|s| partition(ctx, task, plane, bad_refines, arena, s))
+        SCRATCH.with_borrow_mut(|s| partition(ctx, task, plane, bad_refines, arena, s, detach))
     };
-    Some((left, right, plane.axis, plane.pos))
+    Some((children, plane.axis, plane.pos))
 }
 
 /// The cut that removes the largest empty slab from the cell, if that slab spans at least
@@ -649,7 +712,8 @@ const RIGHT: u8 = 2;
 const BOTH: u8 = 3;
 
 /// Splits the task's events at `plane` (Wald & Havran, Algorithms 5 and 6), replacing them at
-/// the top of `arena` with the right child's events, then the left child's.
+/// the top of `arena` with the right child's events, then the left child's; or, if `detach`,
+/// writing each child's events to a list of its own of exactly their size.
 fn partition<P: Primitive>(
     ctx: &Ctx<'_, P>,
     task: &Task,
@@ -657,7 +721,8 @@ fn partition<P: Primitive>(
     bad_refines: u32,
     arena: &mut Vec<Event>,
     scratch: &mut Scratch,
-) -> (Task, Task) {
+    detach: bool,
+) -> Children {
     let Plane {
         axis,
         pos,
@@ -730,19 +795,67 @@ fn partition<P: Primitive>(
             rcount += 1;
         }
     }
-    // Room above the task for both children: at most two events per primitive and axis, plus
-    // one slot each for the branch-free filter's last speculative write.
-    let top = task.bounds[3];
+    // Room for both children: at most two events per primitive and axis, plus one slot each
+    // for the branch-free filter's last speculative write.
     let rcap = 6 * rcount + 1;
+    let lcap = 6 * lcount + 1;
+    let depth = task.depth + 1;
+    let child = |bounds: [usize; 4], count: usize, cell: Aabb| Task {
+        bounds,
+        count,
+        cell,
+        depth,
+        bad_refines,
+    };
+    let (lcell, rcell) = (task.cell.with_max(axis, pos), task.cell.with_min(axis, pos));
+    if detach {
+        let mut lout = vec![Event::ZERO; lcap];
+        let mut rout = vec![Event::ZERO; rcap];
+        let (lb, rb) = merge(task, arena, side, lnew, rnew, &mut lout, &mut rout);
+        for (list, len) in [(&mut lout, lb[3]), (&mut rout, rb[3])] {
+            list.truncate(len);
+            list.shrink_to_fit();
+        }
+        return Children::Detached(
+            (child(lb, lcount, lcell), lout),
+            (child(rb, rcount, rcell), rout),
+        );
+    }
+    let top = task.bounds[3];
     // The arena only grows: slots above the top are stale but written before they are read, so
     // they need no zeroing (truncating and re-growing would zero 48 bytes per reference at
     // every level).
-    let needed = top + rcap + 6 * lcount + 1;
+    let needed = top + rcap + lcap;
     if arena.len() < needed {
         arena.resize(needed, Event::ZERO);
     }
     let (below, above) = arena.split_at_mut(top);
     let (rout, lout) = above.split_at_mut(rcap);
+    let (lb, rb) = merge(task, below, side, lnew, rnew, lout, rout);
+    let (li, ri) = (lb[3], rb[3]);
+    // Move the children down over the parent's events: right first, then left on top.
+    let base = task.bounds[0];
+    arena.copy_within(top..top + ri, base);
+    arena.copy_within(top + rcap..top + rcap + li, base + ri);
+    Children::InPlace(
+        child(lb.map(|b| b + base + ri), lcount, lcell),
+        child(rb.map(|b| b + base), rcount, rcell),
+    )
+}
+
+/// Writes the children's sorted event lists of a task whose events lie in `src` to `lout` and
+/// `rout` (each long enough for six events per primitive and one more): each parent event goes
+/// to the side `side` gives its primitive, and the straddlers' new events `lnew` and `rnew` are
+/// sorted and merged in. Returns where each child's x, y and z events start and end.
+fn merge(
+    task: &Task,
+    src: &[Event],
+    side: &[u8],
+    lnew: &mut [Vec<Event>; 3],
+    rnew: &mut [Vec<Event>; 3],
+    lout: &mut [Event],
+    rout: &mut [Event],
+) -> ([usize; 4], [usize; 4]) {
     let (mut li, mut ri) = (0, 0);
     let mut lb = [0; 4];
     let mut rb = [0; 4];
@@ -758,7 +871,7 @@ fn partition<P: Primitive>(
         let key_at = |list: &[Event], i: usize| list.get(i).map_or(u64::MAX, |e| e.0);
         let (mut lj, mut rj) = (0, 0);
         let (mut lnext, mut rnext) = (key_at(ln, 0), key_at(rn, 0));
-        for &e in task.axis_events(below, a) {
+        for &e in task.axis_events(src, a) {
             let key = e.0;
             while lnext < key {
                 lout[li] = ln[lj];
@@ -786,27 +899,7 @@ fn partition<P: Primitive>(
         }
     }
     (lb[3], rb[3]) = (li, ri);
-    // Move the children down over the parent's events: right first, then left on top.
-    let base = task.bounds[0];
-    arena.copy_within(top..top + ri, base);
-    arena.copy_within(top + rcap..top + rcap + li, base + ri);
-    let depth = task.depth + 1;
-    (
-        Task {
-            bounds: lb.map(|b| b + base + ri),
-            count: lcount,
-            cell: task.cell.with_max(axis, pos),
-            depth,
-            bad_refines,
-        },
-        Task {
-            bounds: rb.map(|b| b + base),
-            count: rcount,
-            cell: task.cell.with_min(axis, pos),
-            depth,
-            bad_refines,
-        },
-    )
+    (lb, rb)
 }
 
 /// The parts of a straddling primitive in the two child cells: clipped exactly with perfect

@@ -1,4 +1,4 @@
-//! The build: cut the root cube into eight equal children, recursively, then flatten.
+//! The build: cut the root cube into eight equal children, recursively, depth first.
 //!
 //! A node holds its primitives as `(index, clipped box)` pairs: the box is the primitive's part
 //! inside the node ([`Primitive::clip_bounds`], exact and rounded outwards for triangles). A pair
@@ -14,10 +14,15 @@
 //! vertex, identical triangles on a mid-plane), which every level would repeat, whereas a zoom
 //! into a cluster inside one octant (the other children nearly empty) goes on. Above all, the
 //! tree never holds more than `max_refs_per_prim` references per primitive (and at least 2¹⁴):
-//! the tree is cut one level at a time, every node of a level proposes its split, in parallel
-//! with rayon, and the splits are accepted in order while the budget lasts. So the memory is
-//! bounded whatever the input, and the tree does not depend on threading. It is flattened depth
-//! first afterwards, each node's children in one block.
+//! each node has a budget of references, which its children's lists must fit, and the rest of
+//! which is shared among them in proportion to their lists. So the tree is bounded whatever the
+//! input, and it does not depend on threading.
+//!
+//! The nodes are written depth first as they are cut, each node's children in one block, so the
+//! build holds only the lists of the nodes on its current paths and of their waiting siblings: at
+//! most about the root's list again, 28 bytes per reference, whereas a level of a deep tree holds
+//! several times that. Subtrees of large nodes are built in parallel with rayon, each into a part
+//! of its own that is appended in order.
 
 use crate::OctreeParams;
 use crate::node::{Block, Node, child_box, midpoint, root_box};
@@ -54,17 +59,12 @@ pub(crate) struct Item {
     pub b: Aabb,
 }
 
-/// A node of the tree before flattening: its list, or where its eight children start.
-enum Temp {
-    Leaf(Vec<u32>),
-    Interior(usize),
-}
-
-/// A node of the level being cut: its place in the arena, its box and its primitives.
-struct Pending {
-    slot: usize,
-    b: Aabb,
-    items: Vec<Item>,
+/// A tree or subtree being written: its blocks and references, depth first.
+#[derive(Default)]
+struct Part {
+    blocks: Vec<Block>,
+    refs: Vec<u32>,
+    depth: u32,
 }
 
 struct Ctx<'a, P> {
@@ -96,65 +96,121 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &OctreeParams) -> Built {
         parallel: params.parallel,
         margin: margin(&out.bounds),
     };
-    let items = ids
+    let budget = ((params.max_refs_per_prim.max(1.0) as f64 * ids.len() as f64) as usize)
+        .max(MIN_REF_BUDGET);
+    let items: Vec<Item> = ids
         .iter()
         .map(|&id| Item {
             id,
             b: prims[id as usize].bounds().intersection(&out.bounds),
         })
         .collect();
-    // The tree is cut one level at a time: every node of a level proposes its split (in
-    // parallel), then the splits are accepted in order while the reference budget lasts, so the
-    // tree does not depend on threading and its memory is bounded whatever the input.
-    let budget = ((params.max_refs_per_prim.max(1.0) as f64 * ids.len() as f64) as usize)
-        .max(MIN_REF_BUDGET);
-    let mut refs = ids.len();
-    let mut arena = vec![Temp::Leaf(Vec::new())];
-    let mut level = vec![Pending {
-        slot: 0,
-        b: out.bounds,
-        items,
-    }];
-    for depth in 0.. {
-        if level.is_empty() {
-            break;
-        }
-        let propose = |p: &Pending| propose(&ctx, p, depth);
-        let proposals: Vec<Option<[Vec<Item>; 8]>> = if ctx.parallel && refs >= PARALLEL_MIN {
-            level.par_iter().map(propose).collect()
-        } else {
-            level.iter().map(propose).collect()
-        };
-        let mut next = Vec::new();
-        for (p, proposal) in level.into_iter().zip(proposals) {
-            let n = p.items.len();
-            match proposal {
-                Some(children)
-                    if (refs + children.iter().map(Vec::len).sum::<usize>()).saturating_sub(n)
-                        <= budget =>
-                {
-                    refs = (refs + children.iter().map(Vec::len).sum::<usize>()).saturating_sub(n);
-                    let first = arena.len();
-                    arena[p.slot] = Temp::Interior(first);
-                    let mid = midpoint(&p.b);
-                    for (i, items) in children.into_iter().enumerate() {
-                        arena.push(Temp::Leaf(Vec::new()));
-                        next.push(Pending {
-                            slot: first + i,
-                            b: child_box(&p.b, mid, i),
-                            items,
-                        });
-                    }
-                }
-                _ => arena[p.slot] = Temp::Leaf(p.items.iter().map(|i| i.id).collect()),
-            }
-        }
-        level = next;
-    }
-    out.root = flatten(&mut arena, 0, 0, &mut out);
+    drop(ids);
+    let mut part = Part::default();
+    out.root = node(&ctx, items, out.bounds, 0, budget, &mut part);
+    out.blocks = part.blocks;
+    out.refs = part.refs;
+    out.depth = part.depth;
     out.blocks.shrink_to_fit();
     out.refs.shrink_to_fit();
     out
+}
+
+/// Builds the subtree of a node with box `b` at `depth` holding `items`, with at most `budget`
+/// references, writing its blocks and references to `out` depth first (each node's children's
+/// block, then their subtrees in order); returns the node.
+///
+/// The tree is built depth first, so the build holds the lists of the nodes on the current path
+/// and their waiting siblings, not a whole level of the tree. The reference budget is shared out
+/// down the tree: a cut is accepted if its children's references fit in the node's budget, and
+/// what is left over goes to the children in proportion to their references. So the tree never
+/// holds more than the root's budget, and the shares, like the tree, do not depend on threading.
+fn node<P: Primitive>(
+    ctx: &Ctx<'_, P>,
+    items: Vec<Item>,
+    b: Aabb,
+    depth: u32,
+    budget: usize,
+    out: &mut Part,
+) -> Node {
+    out.depth = out.depth.max(depth);
+    let n = items.len();
+    if n <= ctx.max_prims || depth >= ctx.max_depth || !divisible(&b) {
+        return leaf(&items, out);
+    }
+    let parts = split_parts(ctx, &items, &b);
+    let counts: [usize; 8] = std::array::from_fn(|i| parts.iter().map(|p| p[i].len()).sum());
+    let total: usize = counts.iter().sum();
+    // A split that leaves one child with every primitive separates nothing. It is still worth
+    // it as a zoom into a cluster that lies (nearly) inside one octant, such as a teapot in a
+    // stadium cell, with little outside; but if the other children hold half as many references
+    // again, the primitives surround a point or overlap around a plane (a fan of triangles
+    // around a vertex, identical triangles on a mid-plane), and every level would repeat it.
+    let separates = !counts.contains(&n) || 2 * (total - n) < n;
+    if !separates || total > budget {
+        return leaf(&items, out);
+    }
+    drop(items);
+    let children = gather(parts, &counts);
+    let slack = (budget - total) as u128;
+    let budgets: [usize; 8] = std::array::from_fn(|i| {
+        counts[i] + (slack * counts[i] as u128 / total.max(1) as u128) as usize
+    });
+    let mid = midpoint(&b);
+    let block = out.blocks.len();
+    out.blocks.push(Block([Node::leaf(0, 0); 8]));
+    let child = |i: usize, items: Vec<Item>, out: &mut Part| {
+        node(
+            ctx,
+            items,
+            child_box(&b, mid, i),
+            depth + 1,
+            budgets[i],
+            out,
+        )
+    };
+    if ctx.parallel && n >= PARALLEL_MIN {
+        // Each child's subtree is built into a part of its own, then appended in order, so the
+        // layout is the sequential one.
+        let subtrees: Vec<(Node, Part)> = children
+            .into_iter()
+            .enumerate()
+            .collect::<Vec<_>>()
+            .into_par_iter()
+            .map(|(i, items)| {
+                let mut part = Part::default();
+                let node = child(i, items, &mut part);
+                (node, part)
+            })
+            .collect();
+        out.blocks
+            .reserve_exact(subtrees.iter().map(|(_, p)| p.blocks.len()).sum());
+        out.refs
+            .reserve_exact(subtrees.iter().map(|(_, p)| p.refs.len()).sum());
+        for (i, (node, part)) in subtrees.into_iter().enumerate() {
+            let (blocks, refs) = (out.blocks.len(), out.refs.len());
+            out.blocks[block].0[i] = node.relocated(blocks, refs);
+            out.blocks.extend(
+                part.blocks
+                    .iter()
+                    .map(|k| Block(k.0.map(|c| c.relocated(blocks, refs)))),
+            );
+            out.refs.extend_from_slice(&part.refs);
+            out.depth = out.depth.max(part.depth);
+        }
+    } else {
+        for (i, items) in children.into_iter().enumerate() {
+            out.blocks[block].0[i] = child(i, items, out);
+        }
+    }
+    Node::interior(block)
+}
+
+/// A leaf listing `items`, with its references appended to `out`.
+fn leaf(items: &[Item], out: &mut Part) -> Node {
+    let node = Node::leaf(out.refs.len(), items.len());
+    out.refs.extend(items.iter().map(|i| i.id));
+    node
 }
 
 /// Whether halving `b` on every axis gives eight smaller boxes in `f32`.
@@ -206,54 +262,34 @@ pub(crate) fn split<P: Primitive>(
     out
 }
 
-/// [`split`], over chunks in parallel for large nodes; the lists come out the same.
-fn split_items<P: Primitive>(ctx: &Ctx<'_, P>, items: &[Item], b: &Aabb) -> [Vec<Item>; 8] {
+/// The children's lists of [`split`], as one set of lists per chunk of `items` (chunks are split
+/// in parallel for large nodes); [`gather`] joins them.
+fn split_parts<P: Primitive>(ctx: &Ctx<'_, P>, items: &[Item], b: &Aabb) -> Vec<[Vec<Item>; 8]> {
+    let split = |chunk| {
+        let mut lists = split(ctx.prims, chunk, b, ctx.margin);
+        // The lists grew by doubling; a large node's chunks all wait for the join, so their
+        // slack would add up to as much again as the lists themselves.
+        lists.iter_mut().for_each(Vec::shrink_to_fit);
+        lists
+    };
     if !ctx.parallel || items.len() < PARALLEL_MIN {
-        return split(ctx.prims, items, b, ctx.margin);
+        return vec![split(items)];
     }
-    let parts: Vec<[Vec<Item>; 8]> = items
-        .par_chunks(PARALLEL_MIN)
-        .map(|chunk| split(ctx.prims, chunk, b, ctx.margin))
-        .collect();
-    std::array::from_fn(|i| parts.iter().flat_map(|p| p[i].iter().copied()).collect())
+    items.par_chunks(PARALLEL_MIN).map(split).collect()
 }
 
-/// The children's lists if node `p` at `depth` is to be cut, or `None` if it stays a leaf.
-fn propose<P: Primitive>(ctx: &Ctx<'_, P>, p: &Pending, depth: u32) -> Option<[Vec<Item>; 8]> {
-    let n = p.items.len();
-    if n <= ctx.max_prims || depth >= ctx.max_depth || !divisible(&p.b) {
-        return None;
+/// Joins the chunks' lists into the children's lists (of `counts` items), freeing each chunk's
+/// list once it is copied, so the copies never hold much more than the lists themselves.
+fn gather(mut parts: Vec<[Vec<Item>; 8]>, counts: &[usize; 8]) -> [Vec<Item>; 8] {
+    if parts.len() == 1 {
+        return parts.pop().unwrap_or_default();
     }
-    let children = split_items(ctx, &p.items, &p.b);
-    // A split that leaves one child with every primitive separates nothing. It is still worth
-    // it as a zoom into a cluster that lies (nearly) inside one octant, such as a teapot in a
-    // stadium cell, with little outside; but if the other children hold half as many references
-    // again, the primitives surround a point or overlap around a plane (a fan of triangles
-    // around a vertex, identical triangles on a mid-plane), and every level would repeat it.
-    let full = children.iter().position(|c| c.len() == n);
-    let others: usize = children.iter().map(Vec::len).sum::<usize>() - n;
-    (full.is_none() || 2 * others < n).then_some(children)
-}
-
-/// Writes the arena's node `at` (at `depth`) into `out` and returns it: a leaf appends its
-/// references; an interior node appends its children's block, then their subtrees, depth first.
-fn flatten(arena: &mut [Temp], at: usize, depth: u32, out: &mut Built) -> Node {
-    out.depth = out.depth.max(depth);
-    match &mut arena[at] {
-        Temp::Leaf(ids) => {
-            let node = Node::leaf(out.refs.len(), ids.len());
-            out.refs.extend_from_slice(ids);
-            *ids = Vec::new();
-            node
+    std::array::from_fn(|i| {
+        let mut list = Vec::with_capacity(counts[i]);
+        for p in &mut parts {
+            list.extend_from_slice(&p[i]);
+            p[i] = Vec::new();
         }
-        &mut Temp::Interior(first) => {
-            let block = out.blocks.len();
-            out.blocks.push(Block([Node::leaf(0, 0); 8]));
-            for i in 0..8 {
-                let node = flatten(arena, first + i, depth + 1, out);
-                out.blocks[block].0[i] = node;
-            }
-            Node::interior(block)
-        }
-    }
+        list
+    })
 }

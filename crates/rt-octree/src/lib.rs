@@ -23,8 +23,10 @@
 //! least half as many references again (a fan of triangles around a vertex, identical triangles
 //! on a mid-plane). A cluster inside one octant, such as a teapot in a stadium's corner cell, is
 //! still zoomed into, since little lies outside it. Memory is bounded whatever the input: the
-//! tree is cut a level at a time and never holds more than `max_refs_per_prim` references per
-//! primitive. Each level's nodes are split in parallel with rayon, and the result does not
+//! tree never holds more than `max_refs_per_prim` references per primitive (each node has a
+//! budget of references, and what its children's lists leave of it is shared among them), and
+//! the build, depth first, holds at most about the root's list again as scratch (28 bytes a
+//! reference). Large nodes' subtrees are built in parallel with rayon, and the result does not
 //! depend on the threads. Cost: O(N) clipped primitives per level, O(N log N) in all for
 //! primitives spread over a surface.
 //!
@@ -142,9 +144,10 @@ pub struct OctreeParams {
     pub max_prims: u32,
     /// The deepest a node may lie (the root has depth 0); clamped to [`MAX_DEPTH`].
     pub max_depth: u32,
-    /// The most references the octree may hold, per valid primitive (at least 2¹⁴ in all). Once
-    /// cutting a node would pass it, that node and every node not yet cut stay leaves. Real
-    /// meshes stay far below it; it bounds memory for adversarial input.
+    /// The most references the octree may hold, per valid primitive (at least 2¹⁴ in all). The
+    /// root has that budget; a node is cut only if its children's lists fit in its budget, and
+    /// the rest of its budget is shared among them in proportion to their lists. Real meshes stay
+    /// far below it; it bounds memory for adversarial input.
     pub max_refs_per_prim: f32,
     /// Skip primitives this ray tested in the last few tests.
     pub mailbox: bool,

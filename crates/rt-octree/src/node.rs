@@ -36,6 +36,15 @@ impl Node {
         }
     }
 
+    /// The node as it reads once its tree's blocks are moved `blocks` places on and its
+    /// references `refs` places on (when a separately built subtree is appended).
+    pub(crate) fn relocated(self, blocks: usize, refs: usize) -> Self {
+        match self.children() {
+            Some(block) => Self::interior(block + blocks),
+            None => Self::leaf(self.first as usize + refs, self.count as usize),
+        }
+    }
+
     /// The index of the children's block, for an interior node.
     #[inline(always)]
     pub fn children(&self) -> Option<usize> {

@@ -10,7 +10,7 @@ use std::path::PathBuf;
 /// Flags of `cargo xtask draw`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// A built-in scene (as `compare` names them) or an OBJ file.
+    /// A built-in scene (as `compare` names them) or a scene file (OBJ, PLY, glTF).
     #[arg(long, default_value = "sphereflake")]
     pub scene: String,
     /// The structure row to draw (as `compare` names them).

@@ -14,7 +14,7 @@ use std::time::Instant;
 #[derive(clap::Args, Debug)]
 pub struct Args {
     /// `whitted` (glass and mirror spheres, a checkerboard floor and a teapot), a built-in mesh
-    /// scene of `compare`, or an OBJ file.
+    /// scene of `compare`, or a scene file (OBJ, PLY, glTF).
     #[arg(long, default_value = "whitted")]
     pub scene: String,
     /// The structure row to trace with (as `compare` names them, or `brute-force`).
@@ -52,7 +52,7 @@ pub struct Args {
 pub fn after_help() -> String {
     let mut s = String::from("Scenes: ");
     s.push_str(&rt_render::builtin_names().join(", "));
-    s.push_str(", or an OBJ file\nStructures: ");
+    s.push_str(", or a scene file (.obj, .ply, .gltf, .glb)\nStructures: ");
     let names: Vec<String> = structures::all().into_iter().map(|e| e.name).collect();
     s.push_str(&names.join(", "));
     s.push_str(", brute-force\n\nExit status: 0 when the PNG is written, 2 on bad input.");

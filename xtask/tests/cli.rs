@@ -505,3 +505,60 @@ fn sized_built_in_scenes_run() {
         }
     }
 }
+
+#[test]
+fn ply_and_gltf_files_run_and_broken_ones_are_one_line_errors() {
+    use rt_core::save::{PlyEncoding, glb_bytes, gltf_embedded, ply_bytes};
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli-formats");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mesh = rt_core::scenes::teapot_with_detail(0.0, 0.3);
+    let files = [
+        (
+            "teapot.ply",
+            ply_bytes(&mesh, PlyEncoding::BinaryLittleEndian),
+        ),
+        ("teapot.gltf", gltf_embedded(&mesh).into_bytes()),
+        ("teapot.glb", glb_bytes(&mesh)),
+    ];
+    for (name, bytes) in &files {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        let out = json(&compare(&[
+            "--scene",
+            path.to_str().unwrap(),
+            "--structures",
+            "bvh,kdtree,grid,hgrid,octree",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--repeats",
+            "1",
+            "--json",
+        ]));
+        assert_eq!(out["triangles"], mesh.triangle_count(), "{name}");
+        let rows = out["results"].as_array().unwrap();
+        assert_eq!(rows.len(), 6, "{name}: brute force and five rows");
+        for row in rows {
+            assert_eq!(row["mismatches"], 0, "{name}: {}", row["structure"]);
+        }
+    }
+    // Broken copies: one line naming the file and where.
+    let mut bad_ply = files[0].1.clone();
+    let n = bad_ply.len();
+    bad_ply[n - 4..].copy_from_slice(&u32::MAX.to_le_bytes());
+    let glb = &files[2].1;
+    for (name, bytes, expected) in [
+        ("bad.ply", bad_ply, "bad.ply: face "),
+        ("cut.glb", glb[..glb.len() / 2].to_vec(), "cut.glb: glTF: "),
+        (
+            "scene.stl",
+            b"solid x".to_vec(),
+            "scene.stl: unknown scene format",
+        ),
+    ] {
+        let path = dir.join(name);
+        std::fs::write(&path, bytes).unwrap();
+        assert_one_line_error(&compare(&["--scene", path.to_str().unwrap()]), expected);
+    }
+}

@@ -11,75 +11,10 @@
 //! plane, so concave polygons come out right (a fan would not).
 
 use crate::Mesh;
+use crate::load::{LoadError, LoadErrorKind, Located};
 use glam::{Vec2, Vec3};
-use std::fmt;
 use std::io::Cursor;
-use std::path::{Path, PathBuf};
-
-/// What went wrong while loading a mesh.
-#[derive(Clone, Debug, PartialEq)]
-pub enum LoadErrorKind {
-    /// The file could not be read.
-    Io(String),
-    /// The bytes are not UTF-8 (nor UTF-16 with a byte-order mark).
-    Encoding,
-    /// A line does not follow the OBJ syntax.
-    Malformed(String),
-    /// A face refers to an element that does not exist (indices start at 1; negative indices
-    /// count back from the last element defined so far).
-    IndexOutOfRange {
-        /// `"vertex"`, `"texture coordinate"` or `"normal"`.
-        element: &'static str,
-        /// The index as written.
-        index: i64,
-        /// How many such elements were defined before this line.
-        defined: usize,
-    },
-    /// A vertex coordinate is NaN or infinite.
-    NonFinite,
-    /// The file holds no triangles (it may hold only points or lines).
-    NoTriangles,
-    /// The OBJ parser rejected the file for a reason the validation pass did not foresee.
-    Parser(String),
-}
-
-/// An error loading a scene file: which file, which line (when one is to blame), and what.
-#[derive(Clone, Debug, PartialEq)]
-pub struct LoadError {
-    /// The file.
-    pub path: PathBuf,
-    /// The 1-based line, when the problem is on one line.
-    pub line: Option<usize>,
-    /// What is wrong.
-    pub kind: LoadErrorKind,
-}
-
-impl fmt::Display for LoadError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "{}", self.path.display())?;
-        if let Some(line) = self.line {
-            write!(f, ":{line}")?;
-        }
-        match &self.kind {
-            LoadErrorKind::Io(e) => write!(f, ": cannot read file: {e}"),
-            LoadErrorKind::Encoding => write!(f, ": not UTF-8 or UTF-16 text"),
-            LoadErrorKind::Malformed(what) => write!(f, ": malformed line: {what}"),
-            LoadErrorKind::IndexOutOfRange {
-                element,
-                index,
-                defined,
-            } => write!(
-                f,
-                ": {element} index {index} out of range ({defined} defined before this line)"
-            ),
-            LoadErrorKind::NonFinite => write!(f, ": vertex coordinate is NaN or infinite"),
-            LoadErrorKind::NoTriangles => write!(f, ": no triangles in the file"),
-            LoadErrorKind::Parser(e) => write!(f, ": OBJ parser error: {e}"),
-        }
-    }
-}
-
-impl std::error::Error for LoadError {}
+use std::path::Path;
 
 /// Loads the triangles of an OBJ file (all objects and groups merged into one mesh).
 ///
@@ -94,16 +29,8 @@ impl std::error::Error for LoadError {}
 /// ```
 pub fn load_obj(path: impl AsRef<Path>) -> Result<Mesh, LoadError> {
     let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|e| LoadError {
-        path: path.to_owned(),
-        line: None,
-        kind: LoadErrorKind::Io(e.to_string()),
-    })?;
-    parse_obj(&bytes).map_err(|(line, kind)| LoadError {
-        path: path.to_owned(),
-        line,
-        kind,
-    })
+    let bytes = crate::load::read(path)?;
+    parse_obj(&bytes).map_err(|(line, kind)| Located::line(line, kind).at(path))
 }
 
 /// Loads OBJ text from memory; `name` is used in errors in place of a path.
@@ -111,16 +38,12 @@ pub fn load_obj(path: impl AsRef<Path>) -> Result<Mesh, LoadError> {
 /// # Errors
 /// As [`load_obj`], except that nothing is read from disk.
 pub fn load_obj_bytes(name: &str, bytes: &[u8]) -> Result<Mesh, LoadError> {
-    parse_obj(bytes).map_err(|(line, kind)| LoadError {
-        path: name.into(),
-        line,
-        kind,
-    })
+    parse_obj(bytes).map_err(|(line, kind)| Located::line(line, kind).at(name))
 }
 
 type ParseResult<T> = Result<T, (Option<usize>, LoadErrorKind)>;
 
-fn parse_obj(bytes: &[u8]) -> ParseResult<Mesh> {
+pub(crate) fn parse_obj(bytes: &[u8]) -> ParseResult<Mesh> {
     let text = decode(bytes)?;
     let corners_have = validate(&text)?;
     // tobj parses `l` (polyline) elements like faces, so a polyline of three or more points
@@ -414,7 +337,7 @@ fn validate(text: &str) -> ParseResult<Corners> {
 /// would cost too much, fall back to a fan. When no ear is found (self-intersecting input), a
 /// convex corner (or else the first one) is clipped anyway, so the loop always ends after
 /// `n - 2` triangles.
-fn triangulate(face: &[u32], pos: &[Vec3], mut emit: impl FnMut([usize; 3])) {
+pub(crate) fn triangulate(face: &[u32], pos: &[Vec3], mut emit: impl FnMut([usize; 3])) {
     const EAR_CLIPPING_LIMIT: usize = 256;
     let n = face.len();
     if n == 3 {

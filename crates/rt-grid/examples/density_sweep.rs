@@ -22,7 +22,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         .unwrap_or_else(|| "../shared/meshes/stanford-bunny.obj".into());
     let mesh = match rt_core::scenes::builtin(&arg) {
         Some(mesh) => mesh,
-        None => rt_core::load_obj(&arg)?,
+        None => rt_core::load_mesh(&arg)?,
     };
     let tris = mesh.triangles();
     let rays = Camera::framing(&mesh.bounds(), 512, 384).primary_rays(512, 384);

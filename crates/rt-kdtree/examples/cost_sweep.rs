@@ -19,7 +19,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args()
         .nth(1)
         .unwrap_or_else(|| "../shared/meshes/stanford-bunny.obj".into());
-    let mesh = rt_core::load_obj(&path)?;
+    let mesh = rt_core::load_mesh(&path)?;
     let tris = mesh.triangles();
     let rays = Camera::framing(&mesh.bounds(), 1024, 768).primary_rays(1024, 768);
     println!(

@@ -281,7 +281,7 @@ pub fn scene(spec: &str, width: u32, height: u32) -> Result<RenderScene, rt_core
     }
     let mesh = match scenes::builtin(spec) {
         Some(mesh) => mesh,
-        None => rt_core::load_obj(spec)?,
+        None => rt_core::load_mesh(spec)?,
     };
     let bounds = mesh.bounds();
     let camera = scenes::camera_for(spec, &bounds, width, height);

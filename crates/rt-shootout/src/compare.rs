@@ -30,7 +30,7 @@ pub enum RayKind {
 
 #[derive(clap::Args, Debug, Clone)]
 pub struct Args {
-    /// A built-in scene name (listed below) or the path of an .obj file; repeat the flag to run
+    /// A built-in scene name (listed below) or the path of an .obj, .ply, .gltf or .glb file; repeat the flag to run
     /// several scenes in turn.
     #[arg(long = "scene", default_value = "sphereflake", value_name = "SCENE")]
     pub scenes: Vec<String>,
@@ -260,7 +260,7 @@ fn select_entries(
     Ok(out)
 }
 
-/// The triangles of a built-in scene or an OBJ file, or a one-line error.
+/// The triangles of a built-in scene or a scene file (OBJ, PLY, glTF), or a one-line error.
 pub fn load_scene(spec: &str) -> Result<(String, Vec<Triangle>), String> {
     if let Some((scene, size)) = scenes::resolve(spec)? {
         return Ok((spec.to_string(), scene.make(size).triangles()));
@@ -274,7 +274,7 @@ pub fn load_scene(spec: &str) -> Result<(String, Vec<Triangle>), String> {
             names.join(", ")
         ));
     }
-    let mesh = rt_core::load_obj(path).map_err(|e| e.to_string())?;
+    let mesh = rt_core::load_mesh(path).map_err(|e| e.to_string())?;
     Ok((spec.to_string(), mesh.triangles()))
 }
 

@@ -16,7 +16,7 @@ pub struct ExplainArgs {
     /// The structure row to explain (as `compare` names them).
     #[arg(long, default_value = "kdtree")]
     pub structure: String,
-    /// A built-in scene (as `compare` names them) or an OBJ file.
+    /// A built-in scene (as `compare` names them) or a scene file (OBJ, PLY, glTF).
     #[arg(long, default_value = "sphereflake")]
     pub scene: String,
     /// The ray, as a rays-file line: "ox oy oz dx dy dz [tmin tmax]".

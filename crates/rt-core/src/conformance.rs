@@ -459,6 +459,7 @@ pub const SCENES: &[&str] = &[
     "large_coordinates",
     "nan_vertex",
     "exponential_chain",
+    "far_origins",
     "planar_triangles",
     "spanning_triangles",
     "invalid_rays",
@@ -489,6 +490,7 @@ pub fn scene(name: &str) -> Scene {
         "spanning_triangles" => spanning_triangles(),
         "invalid_rays" => invalid_rays(),
         "exponential_chain" => exponential_chain(),
+        "far_origins" => far_origins(),
         "lattice" => Scene {
             triangles: lattice_triangles(1, 60),
             rays: lattice_rays(1, 800),
@@ -755,7 +757,7 @@ macro_rules! conformance_tests {
         $crate::conformance_tests!(@each $check, $accel;
             empty_scene one_triangle shared_edge identical_triangles equal_centroids
             zero_area_triangles axis_parallel_rays rays_in_box_faces origins_inside
-            large_coordinates nan_vertex exponential_chain planar_triangles
+            large_coordinates nan_vertex exponential_chain far_origins planar_triangles
             spanning_triangles invalid_rays lattice);
     };
     (@each $check:ident, $accel:ty; $($scene:ident)*) => {
@@ -1356,6 +1358,31 @@ fn exponential_chain() -> Scene {
     }
     let hi = Vec3::new(1.5f32.powi(120), 2.0, 2.0);
     rays.extend(aimed_rays(&mut rng, &triangles, Vec3::splat(-2.0), hi, 200));
+    Scene { triangles, rays }
+}
+
+/// A scene a few thousand units wide (the start of [`exponential_chain`]: 24 triangles, one
+/// behind the other along x) seen from as far as a valid origin goes ([`Ray::MAX_ORIGIN`]): the
+/// ray parameter's rounding step (131,072 at 10¹²) is larger than the scene, so every cell or
+/// node boundary the ray crosses has the same parameter, and hits on different triangles round
+/// to parameters one step apart. A walk must still visit every cell in order and find the hit
+/// brute force finds. (Found by the `trace` fuzz target: the grids started their walk in the
+/// last cell along the ray, where all the boundaries' parameters collapsed, and missed the rest.)
+fn far_origins() -> Scene {
+    let triangles: Vec<Triangle> = exponential_chain().triangles.into_iter().take(24).collect();
+    let mut rng = Rng::new(13);
+    let far = Ray::MAX_ORIGIN;
+    let mut rays = Vec::new();
+    for _ in 0..100 {
+        let (y, z) = (rng.range(-0.5, 0.5), rng.range(-0.5, 0.5));
+        rays.push(Ray::new(Vec3::new(far, y, z), -Vec3::X));
+        rays.push(Ray::new(Vec3::new(-far, y, z), Vec3::X));
+        // Slanted just enough to drift across the triangles' width on the way: aiming from
+        // 10¹² at a point of a unit triangle is meaningless in f32 (the triangle's corners are
+        // one float apart there), but a slope is exact.
+        let slope = Vec3::new(0.0, rng.range(-1e-12, 1e-12), rng.range(-1e-12, 1e-12));
+        rays.push(Ray::new(Vec3::new(far, y, z), slope - Vec3::X));
+    }
     Scene { triangles, rays }
 }
 

@@ -67,9 +67,20 @@ impl Ray {
     /// nothing meaningful.
     pub const MAX_ORIGIN: f32 = (1u64 << 40) as f32;
 
+    /// The range of a valid ray's largest direction component, in magnitude: 2⁻⁴⁰ to 2⁴⁰.
+    ///
+    /// `t` is measured in units of the direction, so a direction of length 10⁻³⁸ puts ordinary
+    /// hits at `t = ∞`, and one of length 10³⁵ puts them at `t` below the smallest normal
+    /// `f32`, where the slab tests' products underflow and a box test and a triangle test
+    /// disagree (both found by the `trace` fuzz target). Any direction can be scaled into range
+    /// without changing the ray; a unit one always is.
+    pub const DIR_RANGE: std::ops::RangeInclusive<f32> =
+        1.0 / (1u64 << 40) as f32..=(1u64 << 40) as f32;
+
     /// Whether origin, direction and interval are usable: origin coordinates finite and at most
-    /// [`Ray::MAX_ORIGIN`] in magnitude; a finite, non-zero direction; `0 <= t_min <= t_max`
-    /// with `t_min` finite (`t_max` may be `+inf`).
+    /// [`Ray::MAX_ORIGIN`] in magnitude; a finite direction whose largest component lies in
+    /// [`Ray::DIR_RANGE`] in magnitude; `0 <= t_min <= t_max` with `t_min` finite (`t_max` may
+    /// be `+inf`).
     ///
     /// Every structure checks this first and answers an invalid ray at once, with no hit and
     /// no node visited: a NaN direction or an origin at 10³⁰ must not walk the whole tree.
@@ -77,7 +88,7 @@ impl Ray {
     pub fn is_valid(&self) -> bool {
         self.origin.abs().cmple(Vec3::splat(Self::MAX_ORIGIN)).all()
             && self.dir.is_finite()
-            && self.dir != Vec3::ZERO
+            && Self::DIR_RANGE.contains(&self.dir.abs().max_element())
             && self.t_min >= 0.0
             && self.t_min.is_finite()
             && self.t_min <= self.t_max

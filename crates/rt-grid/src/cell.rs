@@ -35,7 +35,8 @@ impl GridShape {
 
     /// Cells per axis for `n` primitives in `bounds` at `density` cells per primitive (Cleary &
     /// Wyvill): `n_i = d_i · cbrt(density · n / V)`, rounded, at least 1, at most
-    /// [`MAX_RESOLUTION`], and scaled down uniformly until the total is at most `max_cells`.
+    /// [`MAX_RESOLUTION`], and scaled down uniformly until the total is at most `max_cells` and
+    /// at most `8 · density · n + 64`.
     ///
     /// An axis of zero extent gets one cell and the rule runs over the others (`V` is then an
     /// area or a length).
@@ -64,7 +65,12 @@ impl GridShape {
         };
         let mut k = per_unit;
         let mut res = cells_for(k);
-        let max_cells = max_cells.max(1);
+        // Never far more cells than asked for: an axis of tiny but nonzero extent (a triangle
+        // 10⁻⁴³ thick) makes `V` tiny and the other axes' counts huge, while it keeps one cell
+        // itself, so without this bound a single triangle got 4096 × 4096 × 1 cells (found by
+        // the `trace` fuzz target). Rounding each axis up costs at most 2³ × the target.
+        let wanted = 8.0 * f64::from(density) * n as f64 + 64.0;
+        let max_cells = max_cells.min(wanted.min(usize::MAX as f64) as usize).max(1);
         // Each round shrinks k by the excess, so it ends within a few rounds; the bound on rounds
         // only guards against a non-finite k.
         for _ in 0..64 {
@@ -159,6 +165,14 @@ mod tests {
             GridShape::resolution(&flat, 100, 1.0, usize::MAX),
             [10, 10, 1]
         );
+        // Nearly flat: a tiny but nonzero thickness must not blow up the other axes (it did,
+        // to 4096 × 4096 × 1 for one triangle).
+        let thin = Aabb::new(Vec3::ZERO, Vec3::new(2.0, 1.0, 3.6e-43));
+        let cells: usize = GridShape::resolution(&thin, 1, 4.0, 1 << 24)
+            .iter()
+            .map(|&r| r as usize)
+            .product();
+        assert!(cells <= 8 * 4 + 64, "{cells} cells for one triangle");
         // Degenerate inputs give one cell.
         assert_eq!(GridShape::resolution(&b, 0, 1.0, 10), [1; 3]);
         assert_eq!(GridShape::resolution(&b, 10, f32::NAN, 10), [1; 3]);

@@ -49,8 +49,9 @@ pub struct Dda {
 
 impl Dda {
     /// The walk through `shape` of a ray that is inside its box at parameter `t0`: the first cell
-    /// is the one whose boundary parameters enclose `t0`, found from the rounded entry point's
-    /// cell and corrected against the planes so that it agrees with the steps that follow.
+    /// is the first along the ray whose exit parameter is at or after `t0`, found from the
+    /// rounded entry point's cell and corrected against the planes so that it agrees with the
+    /// steps that follow.
     #[inline(always)]
     pub fn start(shape: &GridShape, r: &RayAxes, t0: f32) -> Self {
         let mut cell = [0u32; 3];
@@ -140,18 +141,23 @@ fn first_cell(shape: &GridShape, r: &RayAxes, axis: usize, t0: f32) -> u32 {
     let n = shape.resolution_per_axis()[axis];
     let mut k = shape.cell_of(axis, r.o[axis] + r.d[axis] * t0);
     let t = |k| r.t_at(shape, axis, k);
+    // The first cell along the ray that it leaves at or after `t0`, so that cells the ray
+    // crosses in no time at all (their planes' parameters all round to `t0`) are walked, not
+    // skipped. That happens when the origin is so far away that the parameter's rounding step
+    // exceeds the cells: a ray from 10¹² towards a grid a few thousand units wide reaches every
+    // plane "at once", and the walk must still go through the cells in order, from the near end.
     if r.d[axis] > 0.0 {
-        while k > 0 && t(k) > t0 {
+        while k > 0 && t(k) >= t0 {
             k -= 1;
         }
-        while k + 1 < n && t(k + 1) <= t0 {
+        while k + 1 < n && t(k + 1) < t0 {
             k += 1;
         }
     } else if r.d[axis] < 0.0 {
-        while k + 1 < n && t(k + 1) > t0 {
+        while k + 1 < n && t(k + 1) >= t0 {
             k += 1;
         }
-        while k > 0 && t(k) <= t0 {
+        while k > 0 && t(k) < t0 {
             k -= 1;
         }
     } else {

@@ -25,6 +25,7 @@
 
 pub mod compare;
 pub mod explain;
+pub mod fuzz;
 pub mod grade;
 pub mod memory;
 pub mod report;

@@ -6,6 +6,12 @@
 //! cell ends at the first of the three crossings, `t_exit`; step along that axis, and stop when
 //! the walk leaves the grid or passes `t1`. Compute each crossing from the plane's coordinate
 //! ([`LabGrid::plane`]), not by adding up step lengths, so rounding does not pile up.
+//!
+//! Rounding still bites when the origin is far away: from 10¹², the parameter's rounding step
+//! (131,072) is larger than a small grid, so every plane is crossed at the same rounded `t`,
+//! and the rounded entry point may lie cells away from the truth. Start in the first cell
+//! along the ray that the ray leaves at or after `t0`, and do not stop at a crossing equal to
+//! `t1`, or the walk skips cells (the kit's `far_origins` scene).
 
 use crate::LabGrid;
 use rt_core::Ray;

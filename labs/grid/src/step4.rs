@@ -3,8 +3,11 @@
 //! Test the triangles of each cell the walk visits, keeping the best hit by the tie rule
 //! ([`Hit::beats`]: smaller `t`, then smaller index). The trap: a triangle spanning several
 //! cells can be hit *beyond* the current cell while a closer triangle waits in the next cell.
-//! So a hit ends the walk only if it lies inside the cell just tested (`t ≤ t_exit`);
-//! otherwise keep it as the best so far and walk on.
+//! So a hit ends the walk only if it lies inside the cell just tested; otherwise keep it as the
+//! best so far and walk on. Allow for rounding: a closer triangle in the next cell can report a
+//! `t` a few units in the last place below a hit on this cell's exit, so walk on until the exit
+//! lies beyond the best hit widened by [`SLAB_FAR_SCALE`](rt_core::SLAB_FAR_SCALE)
+//! (`t_exit > best.t * SLAB_FAR_SCALE`).
 //!
 //! Rays outside the trait's precondition ([`Ray::is_valid`] false: NaN, infinite, zero
 //! direction) must return `None` at once, visiting nothing.

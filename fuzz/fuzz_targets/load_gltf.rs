@@ -1,0 +1,6 @@
+//! Bytes to a mesh or an error with the Gltf loader: no panic, and a sound mesh if any.
+#![no_main]
+
+libfuzzer_sys::fuzz_target!(|data: &[u8]| {
+    rt_shootout::fuzz::load(rt_core::SceneFormat::Gltf, data);
+});

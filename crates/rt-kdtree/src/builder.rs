@@ -926,7 +926,22 @@ fn clip_both<P: Primitive>(
         // The primitive was in the parent cell, so in exact arithmetic it meets a child; if
         // rounding lost it on both sides, keep the loose parts rather than drop it.
         (None, None) => loose(),
-        parts => parts,
+        (l, r) => {
+            // The true parts lie in the primitive's own box. With coordinates far larger than
+            // the cell (a triangle reaching 10¹⁷ clipped to a unit cell) the clipper's rounding
+            // can put a part outside that box, where the primitive would be listed in cells it
+            // misses (found by the `trace` fuzz target: `validate` failed). Keep each part
+            // within the box; if nothing is left, that side's loose part decides.
+            let b = prim.bounds();
+            let (ll, lr) = loose();
+            let within = |part: Option<Aabb>, fallback: Option<Aabb>| {
+                part.and_then(|p| {
+                    let p = p.intersection(&b);
+                    if p.is_empty() { fallback } else { Some(p) }
+                })
+            };
+            (within(l, ll), within(r, lr))
+        }
     }
 }
 

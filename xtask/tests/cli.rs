@@ -10,6 +10,25 @@ fn compare(args: &[&str]) -> Output {
     common::xtask("compare", args)
 }
 
+/// `compare --json` on `scene` with `structures`, at `width` × `height` primary rays, one repeat:
+/// the report, after checking that it exited with status 0.
+fn small_json(scene: &str, structures: &str, width: u32, height: u32) -> serde_json::Value {
+    let (w, h) = (width.to_string(), height.to_string());
+    json(&compare(&[
+        "--scene",
+        scene,
+        "--structures",
+        structures,
+        "--width",
+        &w,
+        "--height",
+        &h,
+        "--repeats",
+        "1",
+        "--json",
+    ]))
+}
+
 fn json(out: &Output) -> serde_json::Value {
     assert!(
         out.status.success(),
@@ -409,19 +428,7 @@ fn report_writes_markdown_charts_and_heatmaps_for_every_scene() {
 
 #[test]
 fn json_carries_the_sah_prediction_for_structures_that_describe_themselves() {
-    let v = json(&compare(&[
-        "--scene",
-        "random-soup",
-        "--structures",
-        "kdtree,grid",
-        "--width",
-        "32",
-        "--height",
-        "24",
-        "--repeats",
-        "1",
-        "--json",
-    ]));
+    let v = small_json("random-soup", "kdtree,grid", 32, 24);
     for row in v["results"].as_array().unwrap() {
         let predicted = &row["predicted_tests"];
         if row["structure"] == "brute-force" {
@@ -484,19 +491,7 @@ fn sized_built_in_scenes_run() {
         ("terrain:50k", 45_000, 55_000),
         ("sphereflake:20k", 14_000, 28_000),
     ] {
-        let v = json(&compare(&[
-            "--scene",
-            spec,
-            "--structures",
-            "bvh,grid",
-            "--width",
-            "32",
-            "--height",
-            "24",
-            "--repeats",
-            "1",
-            "--json",
-        ]));
+        let v = small_json(spec, "bvh,grid", 32, 24);
         assert_eq!(v["scene"], spec);
         let n = v["triangles"].as_u64().unwrap();
         assert!((least..=most).contains(&n), "{spec}: {n} triangles");
@@ -523,19 +518,12 @@ fn ply_and_gltf_files_run_and_broken_ones_are_one_line_errors() {
     for (name, bytes) in &files {
         let path = dir.join(name);
         std::fs::write(&path, bytes).unwrap();
-        let out = json(&compare(&[
-            "--scene",
+        let out = small_json(
             path.to_str().unwrap(),
-            "--structures",
             "bvh,kdtree,grid,hgrid,octree",
-            "--width",
-            "64",
-            "--height",
-            "48",
-            "--repeats",
-            "1",
-            "--json",
-        ]));
+            64,
+            48,
+        );
         assert_eq!(out["triangles"], mesh.triangle_count(), "{name}");
         let rows = out["results"].as_array().unwrap();
         assert_eq!(rows.len(), 6, "{name}: brute force and five rows");

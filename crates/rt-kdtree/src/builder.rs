@@ -933,14 +933,20 @@ fn clip_both<P: Primitive>(
             // misses (found by the `trace` fuzz target: `validate` failed). Keep each part
             // within the box; if nothing is left, that side's loose part decides.
             let b = prim.bounds();
-            let (ll, lr) = loose();
-            let within = |part: Option<Aabb>, fallback: Option<Aabb>| {
+            // The loose parts are computed only if a part falls outside the box (rarely).
+            let within = |part: Option<Aabb>, left: bool| {
                 part.and_then(|p| {
                     let p = p.intersection(&b);
-                    if p.is_empty() { fallback } else { Some(p) }
+                    if !p.is_empty() {
+                        Some(p)
+                    } else if left {
+                        loose().0
+                    } else {
+                        loose().1
+                    }
                 })
             };
-            (within(l, ll), within(r, lr))
+            (within(l, true), within(r, false))
         }
     }
 }

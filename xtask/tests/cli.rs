@@ -550,3 +550,59 @@ fn ply_and_gltf_files_run_and_broken_ones_are_one_line_errors() {
         assert_one_line_error(&compare(&["--scene", path.to_str().unwrap()]), expected);
     }
 }
+
+/// Issue 15's closest-point acceptance: on every shared mesh, each structure's default preset
+/// answers 4,000 closest-point queries exactly as brute force does (all of them checked).
+#[test]
+fn closest_points_agree_with_brute_force_on_every_shared_mesh() {
+    let Some(dir) = shared_meshes_dir() else {
+        return;
+    };
+    let mut meshes: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "obj"))
+        .collect();
+    meshes.sort();
+    assert!(meshes.len() >= 10, "{meshes:?}");
+    for mesh in &meshes {
+        let v = json(&compare(&[
+            "--scene",
+            mesh.to_str().unwrap(),
+            "--query",
+            "closest-point",
+            "--structures",
+            "bvh,bvh-binary,kdtree,grid,hgrid,octree",
+            "--points",
+            "4000",
+            "--check-rays",
+            "4000",
+            "--repeats",
+            "1",
+            "--json",
+        ]));
+        assert_eq!(v["query"], "closest-point");
+        assert_eq!(v["checked_rays"], 4000, "{}", mesh.display());
+        let rows = v["results"].as_array().unwrap();
+        assert_eq!(rows.len(), 7);
+        for r in rows {
+            assert_eq!(r["mismatches"], 0, "{}: {r}", mesh.display());
+            assert_eq!(
+                r["hits"], 4000,
+                "no limit: every query finds a triangle; {r}"
+            );
+        }
+    }
+}
+
+#[test]
+fn closest_point_options_reject_bad_values_in_one_line() {
+    assert_one_line_error(
+        &compare(&["--query", "closest-point", "--points", "0"]),
+        "--points must be at least 1",
+    );
+    assert_one_line_error(
+        &compare(&["--query", "closest-point", "--max-distance=-1"]),
+        "--max-distance must be at least 0",
+    );
+}

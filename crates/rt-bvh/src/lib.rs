@@ -89,6 +89,13 @@
 //! - `sort_children`, `any_hit_path` (true): switch off the nearest-first order and the any-hit
 //!   path, only to measure what they gain (see below).
 //!
+//! # Closest points
+//! [`Accel::closest_point`] walks the same tree nearest box first
+//! (`nearest.rs`): the children a query's ball reaches are sorted by their distance from the point,
+//! the nearest visited next and the others pushed, and a popped box is skipped once the best
+//! distance so far is smaller. Triangle packs are read back lane by lane. On the bunny, 100,000
+//! points (`cargo xtask compare --query closest-point --scene ../shared/meshes/stanford-bunny.obj --structures bvh,kdtree,grid,hgrid,octree`): 33.7 visits and 84.5 triangle tests per query, 308 times brute force's speed.
+//!
 //! # Measured
 //! Against Embree 3.13 (build quality medium, its default; scene flags default), single-threaded
 //! traces of the same triangles and rays (1024×768 per set), one run of `cargo bench -p
@@ -171,6 +178,7 @@
 
 mod builder;
 mod kernels;
+mod nearest;
 mod node;
 mod regions;
 mod simd;
@@ -505,6 +513,18 @@ impl<P: Primitive> Accel for Bvh<P> {
     #[inline]
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
         self.query::<S, true>(ray, stats).is_some()
+    }
+
+    fn bounds(&self) -> rt_core::Aabb {
+        self.root_bounds()
+    }
+
+    /// Nearest box first, pruned by the query's radius (`nearest.rs`).
+    fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        match self.layout {
+            Layout::Binary => self.ball_binary(query, stats),
+            Layout::Wide => self.ball_wide(query, stats),
+        }
     }
 
     fn memory_bytes(&self) -> usize {

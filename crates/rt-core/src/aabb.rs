@@ -151,6 +151,23 @@ impl Aabb {
         self.min.cmple(p).all() && p.cmple(self.max).all()
     }
 
+    /// The squared distance from `p` to the nearest point of the box: 0 inside it, `+inf` for the
+    /// empty box. Closest-point traversals prune a box whose distance exceeds the best found.
+    ///
+    /// Rounding is monotone, so a box inside another never gets a smaller computed distance.
+    ///
+    /// ```
+    /// use rt_core::{Aabb, glam::Vec3};
+    /// let b = Aabb::new(Vec3::ZERO, Vec3::ONE);
+    /// assert_eq!(b.distance_squared(Vec3::new(0.5, 0.5, 0.5)), 0.0);
+    /// assert_eq!(b.distance_squared(Vec3::new(3.0, 1.0, -2.0)), 8.0);
+    /// ```
+    #[inline(always)]
+    pub fn distance_squared(&self, p: Vec3) -> f32 {
+        let d = (self.min - p).max(p - self.max).max(Vec3::ZERO);
+        d.dot(d)
+    }
+
     /// The slab test: the parameter interval `[t_near, t_far]` in which the ray is inside the box,
     /// clipped to `[ray.t_min, t_max]`, or `None` if that interval is empty.
     ///

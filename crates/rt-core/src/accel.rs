@@ -1,6 +1,7 @@
 //! The trait every acceleration structure implements.
 
-use crate::{NoStats, Primitive, Ray, Stats};
+use crate::{Aabb, BallQuery, ClosestPointQuery, NoStats, PointHit, Primitive, Ray, Stats};
+use glam::Vec3;
 use std::fmt::Debug;
 
 /// The closest hit of a ray: which primitive (its index in the slice the structure was built
@@ -108,6 +109,10 @@ pub struct Region {
 ///   smallest primitive index ([`Hit::beats`]);
 /// - [`occluded`](Accel::occluded) is true exactly when `intersect` would return a hit, and may
 ///   stop at the first one it finds;
+/// - [`closest_point`](Accel::closest_point) returns exactly what `BruteForce` returns: the
+///   primitive nearest to the point within the maximum distance, ties broken by the smallest
+///   index ([`PointHit::beats`]), which follows from [`ball_query`](Accel::ball_query) offering
+///   every primitive its contract names;
 /// - invalid primitives ([`Primitive::is_valid`]) are never hit;
 /// - building and tracing never panic and never loop, whatever the input.
 ///
@@ -150,6 +155,53 @@ pub trait Accel: Sized + Send + Sync {
     #[inline]
     fn occluded(&self, ray: &Ray) -> bool {
         self.occluded_with(ray, &mut NoStats)
+    }
+
+    /// The box around every valid primitive the structure holds ([`Aabb::EMPTY`] if none).
+    fn bounds(&self) -> Aabb;
+
+    /// Offers `query` every valid primitive that may lie within its ball: the one traversal
+    /// behind closest-point queries, nearest boxes first so the ball shrinks early.
+    ///
+    /// Contract: every valid primitive with a point within `query.radius_sq().sqrt()` of
+    /// `query.center()` is passed to [`BallQuery::test`] (and counted as a primitive test),
+    /// where the radius is read as it stands when the primitive's box or cell is reached: a
+    /// box (or cell) may be skipped only when its [`Aabb::distance_squared`] from the centre is
+    /// greater than the radius squared. Primitives outside the ball may be offered too, and a
+    /// primitive more than once.
+    fn ball_query<Q: BallQuery<Self::Prim>, S: Stats>(&self, query: &mut Q, stats: &mut S);
+
+    /// The primitive nearest to `point` no farther than `max_distance` (inclusive; `f32::INFINITY`
+    /// for no limit), with its nearest point and distance, reporting events to `stats`.
+    ///
+    /// `None` when nothing lies that near, and for an invalid query (see
+    /// [`ClosestPointQuery::new`]).
+    #[inline]
+    fn closest_point_with<S: Stats>(
+        &self,
+        point: Vec3,
+        max_distance: f32,
+        stats: &mut S,
+    ) -> Option<PointHit> {
+        let mut query = ClosestPointQuery::new(point, max_distance, &self.bounds());
+        self.ball_query(&mut query, stats);
+        query.best()
+    }
+
+    /// The primitive nearest to `point` no farther than `max_distance`: see
+    /// [`closest_point_with`](Accel::closest_point_with).
+    ///
+    /// ```
+    /// use rt_core::{Accel, BruteForce, Triangle, glam::Vec3};
+    /// let tris = [Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y)];
+    /// let accel = BruteForce::build(&tris, &Default::default());
+    /// let near = accel.closest_point(Vec3::new(2.0, 0.0, 0.0), f32::INFINITY).unwrap();
+    /// assert_eq!((near.prim, near.point, near.distance), (0, Vec3::X, 1.0));
+    /// assert!(accel.closest_point(Vec3::new(2.0, 0.0, 0.0), 0.5).is_none());
+    /// ```
+    #[inline]
+    fn closest_point(&self, point: Vec3, max_distance: f32) -> Option<PointHit> {
+        self.closest_point_with(point, max_distance, &mut NoStats)
     }
 
     /// Heap and inline bytes the structure holds, its copy of the primitives included.

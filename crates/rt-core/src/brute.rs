@@ -1,6 +1,6 @@
 //! The O(N) reference every structure is checked against.
 
-use crate::{Accel, BuildStats, Hit, Primitive, Ray, Stats};
+use crate::{Aabb, Accel, BallQuery, BuildStats, Hit, Primitive, Ray, Stats};
 
 /// Tests every primitive for every ray and keeps the closest: the definition of the right answer.
 ///
@@ -9,6 +9,7 @@ use crate::{Accel, BuildStats, Hit, Primitive, Ray, Stats};
 pub struct BruteForce<P: Primitive> {
     prims: Vec<P>,
     ids: Vec<u32>,
+    bounds: Aabb,
 }
 
 impl<P: Primitive> Accel for BruteForce<P> {
@@ -21,13 +22,16 @@ impl<P: Primitive> Accel for BruteForce<P> {
     }
 
     fn build(prims: &[P], _: &()) -> Self {
-        let (ids, prims) = prims
+        let (ids, prims): (Vec<u32>, Vec<P>) = prims
             .iter()
             .enumerate()
             .filter(|(_, p)| p.is_valid())
             .map(|(i, p)| (i as u32, p.clone()))
             .unzip();
-        Self { prims, ids }
+        let bounds = prims
+            .iter()
+            .fold(Aabb::EMPTY, |b, p: &P| b.union(p.bounds()));
+        Self { prims, ids, bounds }
     }
 
     fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
@@ -67,6 +71,22 @@ impl<P: Primitive> Accel for BruteForce<P> {
             crate::trace::blocked(stats, id, blocks);
             blocks
         })
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// Offers every valid primitive, in index order, pruning nothing (but an invalid query's
+    /// negative radius).
+    fn ball_query<Q: BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        if query.radius_sq() < 0.0 {
+            return;
+        }
+        for (p, &id) in self.prims.iter().zip(&self.ids) {
+            stats.prim_test();
+            query.test(p, id);
+        }
     }
 
     fn memory_bytes(&self) -> usize {

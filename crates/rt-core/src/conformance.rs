@@ -16,8 +16,10 @@
 //!
 //! "Answers exactly like brute force" means: for every ray, the same primitive index (ties broken
 //! by smallest `t`, then smallest index), `t` within a relative 1e-5, and the same occlusion
-//! answer; the answer must not change when statistics are counted; and the structure must report
-//! the number of valid primitives it kept.
+//! answer; for every closest-point query ([`scene_points`]: points on, near and far from the
+//! primitives, with and without a maximum distance), the same primitive and a distance within a
+//! relative 1e-5 ([`PointHit::agree`]); the answer must not change when statistics are counted;
+//! and the structure must report the number of valid primitives it kept.
 //!
 //! The number of proptest cases is proptest's default (256) unless `PROPTEST_CASES` is set.
 //!
@@ -26,7 +28,7 @@
 //! ray it was on (see [`check_case`]).
 
 use crate::trace::{Event, Outcome, Trace};
-use crate::{Accel, BruteForce, Counters, Hit, Primitive, Ray, Rng, Sphere, Triangle};
+use crate::{Accel, BruteForce, Counters, Hit, PointHit, Primitive, Ray, Rng, Sphere, Triangle};
 use glam::Vec3;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
@@ -173,6 +175,165 @@ fn compare_rays_probed<A: Accel>(
     Ok(())
 }
 
+/// A disagreement between a structure and brute force on one closest-point query.
+#[derive(Clone, Debug)]
+pub struct PointMismatch {
+    /// The query point.
+    pub point: Vec3,
+    /// The query's maximum distance.
+    pub max_distance: f32,
+    /// What brute force answered.
+    pub expected: Option<PointHit>,
+    /// What the structure answered.
+    pub got: Option<PointHit>,
+    /// More about the failure, when there is more to say (else empty).
+    pub detail: Box<str>,
+}
+
+impl fmt::Display for PointMismatch {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let p = self.point;
+        write!(
+            f,
+            "closest_point disagrees with brute force\n  query: closest_point(Vec3::new({:?}, {:?}, {:?}), {:?})\n  expected: {:?}\n  got:      {:?}",
+            p.x, p.y, p.z, self.max_distance, self.expected, self.got
+        )?;
+        if !self.detail.is_empty() {
+            write!(f, "\n  {}", self.detail)?;
+        }
+        Ok(())
+    }
+}
+
+/// Compares `accel`'s closest-point answers with `reference`'s for every `(point, maximum
+/// distance)`, counted and uncounted. An invalid query (see
+/// [`ClosestPointQuery::new`](crate::ClosestPointQuery::new)) must return at once: nothing
+/// found, no primitive test, at most one node visit.
+///
+/// # Errors
+/// The first [`PointMismatch`].
+pub fn compare_points<A: Accel>(
+    accel: &A,
+    reference: &BruteForce<A::Prim>,
+    points: &[(Vec3, f32)],
+) -> Result<(), PointMismatch> {
+    compare_points_probed(accel, reference, points, &Probe::default())
+}
+
+fn compare_points_probed<A: Accel>(
+    accel: &A,
+    reference: &BruteForce<A::Prim>,
+    points: &[(Vec3, f32)],
+    probe: &Probe,
+) -> Result<(), PointMismatch> {
+    for &(point, max_distance) in points {
+        probe.set(Doing::Point(point, max_distance));
+        let mismatch = |expected, got, detail: String| PointMismatch {
+            point,
+            max_distance,
+            expected,
+            got,
+            detail: detail.into(),
+        };
+        let valid = point.is_finite()
+            && point.abs().max_element() <= Ray::MAX_ORIGIN
+            && max_distance >= 0.0;
+        let mut c = Counters::default();
+        let counted = accel.closest_point_with(point, max_distance, &mut c);
+        if !valid {
+            if counted.is_some() || c.prim_tests > 0 || c.node_visits > 1 {
+                return Err(mismatch(
+                    None,
+                    counted,
+                    format!(
+                        "an invalid query must return at once; got {} node visits and {} \
+                         primitive tests",
+                        c.node_visits, c.prim_tests
+                    ),
+                ));
+            }
+            continue;
+        }
+        let expected = reference.closest_point(point, max_distance);
+        let got = accel.closest_point(point, max_distance);
+        if !PointHit::agree(expected, got) {
+            return Err(mismatch(expected, got, String::new()));
+        }
+        if counted != got {
+            return Err(mismatch(
+                got,
+                counted,
+                "closest_point_with(Counters) answers differently from closest_point".into(),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// Closest-point queries probing `prims` as the kit runs them, drawn from the scene itself so a
+/// fixed scene needs no points of its own. For each ray origin: no limit, a limit just below
+/// brute force's answer (nothing may be found) and exactly at it (the answer must be found).
+/// For up to 64 primitives: their centroid, their own nearest points to the first rays' origins
+/// (on the surface: vertices, edge points and face points), those points pushed off the
+/// surface, and the points of them farthest out along the axes (vertices, for triangles).
+/// Then points far outside the scene, and invalid ones (NaN, beyond
+/// [`Ray::MAX_ORIGIN`], a negative limit).
+pub fn scene_points<P: Primitive>(prims: &[P], rays: &[Ray]) -> Vec<(Vec3, f32)> {
+    let reference = BruteForce::build(prims, &());
+    let bounds = reference.bounds();
+    let mut points = Vec::new();
+    let add_limited = |points: &mut Vec<(Vec3, f32)>, p: Vec3| {
+        points.push((p, f32::INFINITY));
+        if let Some(h) = reference.closest_point(p, f32::INFINITY) {
+            points.push((p, h.distance));
+            if h.distance > 0.0 {
+                points.push((p, h.distance * 0.999));
+            }
+        }
+    };
+    for ray in rays.iter().filter(|r| r.origin.is_finite()).take(64) {
+        add_limited(&mut points, ray.origin);
+    }
+    let size = bounds.extent().max_element().max(1.0);
+    let far = [
+        Vec3::X,
+        Vec3::NEG_X,
+        Vec3::Y,
+        Vec3::NEG_Y,
+        Vec3::Z,
+        Vec3::NEG_Z,
+    ];
+    for prim in prims.iter().filter(|p| p.is_valid()).take(64) {
+        points.push((prim.centroid(), f32::INFINITY));
+        for ray in rays.iter().filter(|r| r.origin.is_finite()).take(3) {
+            let on = prim.closest_point(ray.origin);
+            points.push((on, f32::INFINITY));
+            points.push((on, 0.0));
+            add_limited(&mut points, on + (on - ray.origin) * 1e-3);
+        }
+        for d in far {
+            points.push((prim.closest_point(prim.centroid() + d * size * 100.0), 0.0));
+        }
+    }
+    if !bounds.is_empty() {
+        let c = bounds.center();
+        for d in far {
+            add_limited(&mut points, c + d * size * 1000.0);
+            points.push((c + d * 1e6, f32::INFINITY));
+        }
+        points.push((bounds.min, f32::INFINITY));
+        points.push((bounds.max, f32::INFINITY));
+    }
+    points.retain(|(p, _)| p.abs().max_element() <= Ray::MAX_ORIGIN);
+    points.extend([
+        (Vec3::new(f32::NAN, 0.0, 0.0), f32::INFINITY),
+        (Vec3::splat(4.0 * Ray::MAX_ORIGIN), f32::INFINITY),
+        (Vec3::ZERO, -1.0),
+        (Vec3::ZERO, f32::NAN),
+    ]);
+    points
+}
+
 /// Whether a traced walk matches the counted one: the same answer and counts and, if the
 /// structure reports events at all, one `Enter` per node visit, one `Test` per primitive test,
 /// one `Skip` per mailbox skip, and a `Test` that found the answer's primitive at its `t`.
@@ -282,7 +443,13 @@ fn check_queries<A: Accel + 'static>(
         check_regions(&accel)
             .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
         compare_rays_probed(&accel, &reference, &rays, probe, any)
-            .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))
+            .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
+        if any {
+            let points = scene_points(&prims, &rays);
+            compare_points_probed(&accel, &reference, &points, probe)
+                .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
+        }
+        Ok(())
     })
 }
 
@@ -310,6 +477,7 @@ enum Doing {
     Starting,
     Phase(&'static str, usize),
     Tracing(Ray),
+    Point(Vec3, f32),
 }
 
 impl Probe {
@@ -337,6 +505,10 @@ impl Probe {
             Ok(Doing::Tracing(ray)) => {
                 format!("ray {}\n  rays-file line: {}", ray.to_rust(), ray.to_line())
             }
+            Ok(Doing::Point(p, max)) => format!(
+                "closest_point(Vec3::new({:?}, {:?}, {:?}), {max:?})",
+                p.x, p.y, p.z
+            ),
         }
     }
 }

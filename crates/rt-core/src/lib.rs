@@ -20,10 +20,18 @@
 //! assert!(accel.occluded(&ray));
 //! ```
 //!
+//! # Closest points
+//! [`Accel::closest_point`] finds the primitive nearest to a point (a [`PointHit`]: index, point,
+//! distance). Structures implement one traversal, [`Accel::ball_query`], over a [`BallQuery`]
+//! whose ball shrinks as primitives are found; [`ClosestPointQuery`] is the standard one, and
+//! callers can write others (a transformed instance, all primitives within a radius).
+//!
 //! # Conventions
 //! - A hit is the smallest `t` in the ray's closed interval `[t_min, t_max]`; equal `t` goes to
 //!   the smaller primitive index ([`Hit::beats`]). The answer is unique, so structures can be
 //!   compared exactly.
+//! - The nearest primitive to a point is unique the same way: equal distances go to the smaller
+//!   index ([`PointHit::beats`]).
 //! - Invalid primitives (non-finite, zero-area; [`Primitive::is_valid`]) are never hit.
 //! - Nothing here panics on bad geometry or bad files: loaders return typed errors naming the
 //!   file and line.
@@ -33,6 +41,7 @@ mod aabb;
 mod accel;
 mod brute;
 mod clip;
+mod closest;
 mod cost;
 mod gltf;
 pub mod leaf;
@@ -62,6 +71,9 @@ pub use aabb::{Aabb, NEAR_TIE, SLAB_FAR_SCALE};
 pub use accel::{Accel, BuildStats, Hit, Region, ValidationError};
 pub use brute::BruteForce;
 pub use clip::{clip_triangle_bounds, split_triangle_bounds};
+pub use closest::{
+    BallQuery, ClosestPointQuery, PointHit, closest_point_on_triangle, point_distance,
+};
 pub use cost::{PredictedCost, predicted_cost};
 pub use load::{LoadError, LoadErrorKind, SceneFormat, load_mesh, load_mesh_bytes};
 pub use mailbox::Mailbox;

@@ -82,13 +82,26 @@ pub trait Primitive: Clone + Send + Sync + Debug + 'static {
     /// primitive with a smaller index (the tie rule of [`Accel`](crate::Accel)).
     fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit>;
 
+    /// The point of the primitive's surface nearest to `p`: what closest-point queries
+    /// ([`Accel::closest_point`](crate::Accel::closest_point)) compare, by
+    /// [`point_distance`](crate::point_distance) from `p`.
+    ///
+    /// It must be a deterministic function of the primitive and `p`, and lie within a few units
+    /// in the last place of the primitive's largest coordinate from the true nearest point (the
+    /// margin [`ClosestPointQuery`](crate::ClosestPointQuery) prunes with). [`Triangle`] and
+    /// [`Sphere`](crate::Sphere) compute it in `f64` and round once.
+    ///
+    /// [`Triangle`]: crate::Triangle
+    fn closest_point(&self, p: Vec3) -> Vec3;
+
     /// The primitive as a plain triangle and the test its [`intersect`](Primitive::intersect)
     /// runs, if it is one; `None` (the default) otherwise.
     ///
     /// Structures with SIMD triangle kernels (rt-bvh's wide layout) store such primitives
     /// pre-processed in packs and run that test themselves, bit for bit as the scalar function
     /// does, instead of calling `intersect`. Return `Some` only when `intersect` and `occludes`
-    /// answer exactly as that test on that triangle does.
+    /// answer exactly as that test on that triangle does, and `closest_point` as
+    /// [`Triangle`](crate::Triangle)'s.
     #[inline]
     fn as_triangle(&self) -> Option<(crate::Triangle, TriangleTest)> {
         None

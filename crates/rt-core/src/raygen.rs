@@ -149,6 +149,42 @@ pub fn incoherent_rays(bounds: &Aabb, count: usize, seed: u64) -> Vec<Ray> {
         .collect()
 }
 
+/// `count` points for closest-point queries, drawn from `seed`: alternately a point uniform in
+/// `bounds` grown by a quarter of its extent on every side (so some lie outside the scene), and
+/// a point near the surface: on a random valid primitive (the nearest point of it to a random
+/// point of its box), moved by up to 2% of the box's diagonal in a random direction.
+///
+/// ```
+/// use rt_core::{Aabb, Primitive, Triangle, glam::Vec3, raygen::query_points};
+/// let tris = [Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y)];
+/// let points = query_points(&tris, &tris[0].bounds(), 100, 1);
+/// assert_eq!(points.len(), 100);
+/// assert_eq!(points, query_points(&tris, &tris[0].bounds(), 100, 1));
+/// ```
+pub fn query_points<P: Primitive>(
+    prims: &[P],
+    bounds: &Aabb,
+    count: usize,
+    seed: u64,
+) -> Vec<Vec3> {
+    let mut rng = Rng::new(seed);
+    let valid: Vec<&P> = prims.iter().filter(|p| p.is_valid()).collect();
+    let grow = bounds.extent() * 0.25;
+    let reach = bounds.extent().length() * 0.02;
+    (0..count)
+        .map(|i| {
+            if i % 2 == 0 || valid.is_empty() || valid.len() > u32::MAX as usize {
+                rng.in_box(bounds.min - grow, bounds.max + grow)
+            } else {
+                let p = valid[rng.below(valid.len() as u32) as usize];
+                let b = p.bounds();
+                let on = p.closest_point(rng.in_box(b.min, b.max));
+                on + rng.unit_vector() * (reach * rng.f32())
+            }
+        })
+        .collect()
+}
+
 /// A point light above and to the side of the box, at twice its radius from the centre.
 pub fn default_light(bounds: &Aabb) -> Vec3 {
     bounds.center() + Vec3::new(0.6, 1.0, 0.4).normalize() * bounds.extent().length()

@@ -91,6 +91,14 @@ impl Primitive for Shape {
     }
 
     #[inline]
+    fn closest_point(&self, p: Vec3) -> Vec3 {
+        match self {
+            Shape::Triangle(t) => t.closest_point(p),
+            Shape::Sphere(s) => s.closest_point(p),
+        }
+    }
+
+    #[inline]
     fn as_triangle(&self) -> Option<(Triangle, TriangleTest)> {
         match self {
             Shape::Triangle(t) => t.as_triangle(),

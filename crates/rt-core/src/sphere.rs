@@ -68,6 +68,14 @@ impl Primitive for Sphere {
         self.center.is_finite() && self.radius.is_finite() && self.radius > 0.0
     }
 
+    /// The point `center + radius·(p - center)/|p - center|`, computed in `f64`; from the centre
+    /// itself, the sphere's top (`+y`).
+    fn closest_point(&self, p: Vec3) -> Vec3 {
+        let c = self.center.as_dvec3();
+        let dir = (p.as_dvec3() - c).try_normalize().unwrap_or(glam::DVec3::Y);
+        (c + f64::from(self.radius) * dir).as_vec3()
+    }
+
     /// The nearer root inside the interval; from inside the sphere that is the far root.
     #[inline]
     fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {

@@ -252,6 +252,13 @@ impl Primitive for Triangle {
         Some((*self, TriangleTest::Watertight))
     }
 
+    /// [`closest_point_on_triangle`](crate::closest_point_on_triangle) with the edges
+    /// `v1 - v0` and `v2 - v0`.
+    #[inline]
+    fn closest_point(&self, p: Vec3) -> Vec3 {
+        crate::closest_point_on_triangle(self.v0, self.v1 - self.v0, self.v2 - self.v0, p)
+    }
+
     /// The point interpolated from the vertices with the barycentrics `u`, `v` (not
     /// `ray.at(t)`, whose error grows with the distance travelled), the unit normal of the
     /// winding, and an error bound relative to the largest vertex coordinate.
@@ -313,6 +320,10 @@ impl Primitive for MtTriangle {
     #[inline]
     fn as_triangle(&self) -> Option<(Triangle, TriangleTest)> {
         Some((self.0, TriangleTest::MollerTrumbore))
+    }
+    #[inline]
+    fn closest_point(&self, p: Vec3) -> Vec3 {
+        self.0.closest_point(p)
     }
     #[inline]
     fn surface(&self, _ray: &Ray, _t: f32, u: f32, v: f32) -> SurfacePoint {

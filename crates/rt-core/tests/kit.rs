@@ -2,7 +2,8 @@
 //! panic on one ray fail with a short message naming that ray.
 
 use rt_core::conformance::{check_case_within, check_random, scene};
-use rt_core::{Accel, BruteForce, BuildStats, Hit, Ray, Stats, Triangle};
+use rt_core::glam::Vec3;
+use rt_core::{Aabb, Accel, BallQuery, BruteForce, BuildStats, Hit, Ray, Stats, Triangle};
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -43,12 +44,96 @@ impl<const PANICS: bool> Accel for Broken<PANICS> {
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
         self.0.occluded_with(ray, stats)
     }
+    fn bounds(&self) -> Aabb {
+        self.0.bounds()
+    }
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.ball_query(query, stats);
+    }
     fn memory_bytes(&self) -> usize {
         self.0.memory_bytes()
     }
     fn build_stats(&self) -> BuildStats {
         self.0.build_stats()
     }
+}
+
+/// Brute force for rays, but its ball query prunes like a structure that forgot the tie rule's
+/// margin: it offers only the primitives after the first one it finds inside the ball.
+struct StopsAtFirst(BruteForce<Triangle>);
+
+/// Forwards to a query and remembers whether anything has been offered yet.
+struct Once<'a, Q> {
+    inner: &'a mut Q,
+    offered: bool,
+}
+
+impl<Q: BallQuery<Triangle>> BallQuery<Triangle> for Once<'_, Q> {
+    fn center(&self) -> rt_core::glam::Vec3 {
+        self.inner.center()
+    }
+    fn radius_sq(&self) -> f32 {
+        self.inner.radius_sq()
+    }
+    fn test(&mut self, prim: &Triangle, id: u32) {
+        if !self.offered {
+            self.offered = true;
+            self.inner.test(prim, id);
+        }
+    }
+    fn test_triangle(&mut self, v0: Vec3, e1: Vec3, e2: Vec3, id: u32) {
+        if !self.offered {
+            self.offered = true;
+            self.inner.test_triangle(v0, e1, e2, id);
+        }
+    }
+}
+
+impl Accel for StopsAtFirst {
+    type Prim = Triangle;
+    type Params = ();
+    const NAME: &'static str = "stops-at-first";
+    fn presets() -> Vec<(&'static str, ())> {
+        vec![("default", ())]
+    }
+    fn build(prims: &[Triangle], _: &()) -> Self {
+        Self(BruteForce::build(prims, &()))
+    }
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        self.0.intersect_with(ray, stats)
+    }
+    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+        self.0.occluded_with(ray, stats)
+    }
+    fn bounds(&self) -> Aabb {
+        self.0.bounds()
+    }
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        let mut once = Once {
+            inner: query,
+            offered: false,
+        };
+        self.0.ball_query(&mut once, stats);
+    }
+    fn memory_bytes(&self) -> usize {
+        self.0.memory_bytes()
+    }
+    fn build_stats(&self) -> BuildStats {
+        self.0.build_stats()
+    }
+}
+
+#[test]
+fn a_wrong_closest_point_query_fails_with_its_point_named() {
+    // Rays all agree; only the closest-point checks can catch it.
+    let s = scene("shared_edge");
+    let e = check_case_within::<StopsAtFirst>(&(), &s.triangles, &s.rays, Duration::from_secs(20))
+        .expect_err("offering only the first primitive must fail");
+    assert!(
+        e.contains("closest_point disagrees with brute force"),
+        "{e}"
+    );
+    assert!(e.contains("query: closest_point(Vec3::new("), "{e}");
 }
 
 #[test]

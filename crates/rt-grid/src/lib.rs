@@ -35,6 +35,13 @@
 //! boundary, with `±0` direction components, lying in a cell plane or passing through cell edges
 //! and corners are handled exactly; see `traverse.rs`.
 //!
+//! # Closest points
+//! [`Accel::closest_point`] visits cells in growing shells around
+//! the point's cell ([`nearest::shells`]), tests each cell the query's ball still reaches, and stops
+//! at the first shell wholly outside the ball. Far from the surface the ball holds many empty cells
+//! that a hierarchy would discard at once: on the bunny, 100,000 points (`cargo xtask compare --query closest-point --scene ../shared/meshes/stanford-bunny.obj --structures bvh,kdtree,grid,hgrid,octree`), 4,308 cells and
+//! 315 tests per query, 7 times brute force's speed.
+//!
 //! # Measured
 //! The BVH in this section is the binary SAH tree: the `bvh` row when these figures were
 //! measured, `bvh-binary` since rt-bvh's default became its 8-wide tree (faster still; see
@@ -96,6 +103,7 @@
 mod builder;
 mod cell;
 pub mod dda;
+pub mod nearest;
 mod regions;
 mod traverse;
 mod validate;
@@ -229,6 +237,19 @@ impl<P: Primitive> Accel for Grid<P> {
     #[inline]
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
         self.walk::<S, true>(ray, stats).is_some()
+    }
+
+    fn bounds(&self) -> rt_core::Aabb {
+        if self.valid_prims == 0 {
+            rt_core::Aabb::EMPTY
+        } else {
+            self.shape.bounds()
+        }
+    }
+
+    /// Cells in growing shells around the centre ([`nearest::shells`]).
+    fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.ball(query, stats);
     }
 
     fn memory_bytes(&self) -> usize {

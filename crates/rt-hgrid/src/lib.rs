@@ -33,6 +33,12 @@
 //! in several cells once, and where two boundaries are crossed within rounding of each other the
 //! cells beside the path are tested too — a parent cell there by its whole list.
 //!
+//! # Closest points
+//! [`Accel::closest_point`] visits the top grid's cells in growing
+//! shells around the point (`rt_grid::nearest::shells`), and a cell's nested grid the same way
+//! before the shell goes on. On the bunny, 100,000 points (`cargo xtask compare --query closest-point --scene ../shared/meshes/stanford-bunny.obj --structures bvh,kdtree,grid,hgrid,octree`): 698 cells and 294 tests per
+//! query, 33 times brute force's speed.
+//!
 //! # Measured
 //! The BVH in this section is the binary SAH tree: the `bvh` row when these figures were
 //! measured, `bvh-binary` since rt-bvh's default became its 8-wide tree (faster still; see
@@ -79,6 +85,7 @@
 #![warn(missing_docs)]
 
 mod builder;
+mod nearest;
 mod node;
 mod regions;
 mod traverse;
@@ -210,6 +217,19 @@ impl<P: Primitive> Accel for HGrid<P> {
     #[inline]
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
         self.walk::<S, true>(ray, stats).is_some()
+    }
+
+    fn bounds(&self) -> rt_core::Aabb {
+        if self.valid_prims == 0 {
+            rt_core::Aabb::EMPTY
+        } else {
+            self.levels[0].shape.bounds()
+        }
+    }
+
+    /// Shells of cells around the centre, nested grids searched in turn (`nearest.rs`).
+    fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.ball(query, stats);
     }
 
     fn memory_bytes(&self) -> usize {

@@ -59,6 +59,12 @@
 //!
 //! Any-hit queries return at the first hit in the ray's interval.
 //!
+//! # Closest points
+//! [`Accel::closest_point`] descends the near side of each plane
+//! first and goes to the far side only while the query's ball reaches across it; each stack entry
+//! carries its cell, cut from the scene box by the planes above it (`nearest.rs`). On the bunny,
+//! 100,000 points (`cargo xtask compare --query closest-point --scene ../shared/meshes/stanford-bunny.obj --structures bvh,kdtree,grid,hgrid,octree`): 504 visits and 73.7 tests per query, 123 times brute force's speed.
+//!
 //! # Measured
 //! The BVH in this section is the binary SAH tree: the `bvh` row when these figures were
 //! measured, `bvh-binary` since rt-bvh's default became its 8-wide tree (faster still; see
@@ -134,6 +140,7 @@
 #![warn(missing_docs)]
 
 mod builder;
+mod nearest;
 mod node;
 mod regions;
 mod traverse;
@@ -365,6 +372,15 @@ impl<P: Primitive> Accel for KdTree<P> {
             Traversal::Restart => self.traverse_restart::<S, true>(ray, stats),
         }
         .is_some()
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.bounds
+    }
+
+    /// Near side first, the far side while the ball reaches it (`nearest.rs`).
+    fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.ball(query, stats);
     }
 
     fn memory_bytes(&self) -> usize {

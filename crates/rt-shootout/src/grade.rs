@@ -83,6 +83,15 @@ impl Accel for Row {
     fn occluded_with<S: Stats>(&self, ray: &rt_core::Ray, stats: &mut S) -> bool {
         ask(self.0.as_ref(), ray, Query::Any, stats).is_some()
     }
+    fn bounds(&self) -> rt_core::Aabb {
+        self.0.bounds()
+    }
+    /// The row's own ball query, its counts replayed into `stats` when it returns.
+    fn ball_query<Q: rt_core::BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        let mut c = rt_core::Counters::default();
+        self.0.ball_query_dyn(query, &mut c);
+        replay(c, stats);
+    }
     fn memory_bytes(&self) -> usize {
         self.0.memory_bytes()
     }

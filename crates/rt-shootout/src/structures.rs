@@ -6,8 +6,10 @@
 
 use rayon::prelude::*;
 use rt_bvh::Bvh;
+use rt_core::glam::Vec3;
 use rt_core::{
-    Accel, BruteForce, BuildStats, Counters, Hit, Ray, Region, Shape, Stats, Trace, Triangle,
+    Aabb, Accel, BallQuery, BruteForce, BuildStats, Counters, Hit, PointHit, Ray, Region, Shape,
+    Stats, Trace, Triangle,
 };
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
@@ -44,6 +46,15 @@ pub trait Traceable: Send + Sync {
     fn trace(&self, ray: &Ray, query: Query) -> (Option<Hit>, Trace);
     /// Every node or cell ([`Accel::regions`]), for `draw`.
     fn regions(&self) -> Vec<Region>;
+    /// [`Accel::bounds`].
+    fn bounds(&self) -> Aabb;
+    /// [`Accel::ball_query`] for a query known only as a trait object, counting into `counters`.
+    fn ball_query_dyn(&self, query: &mut dyn BallQuery<Triangle>, counters: &mut Counters);
+    /// The closest point for every `(point, maximum distance)`, with counters, in parallel over
+    /// the current rayon pool.
+    fn closest_counted(&self, points: &[(Vec3, f32)]) -> (Vec<Option<PointHit>>, Counters);
+    /// The closest points without counters; returns how many were found. The timed path.
+    fn closest_timed(&self, points: &[(Vec3, f32)]) -> usize;
 }
 
 struct Built<A>(A);
@@ -123,6 +134,42 @@ impl<A: Accel<Prim = Triangle>> Traceable for Built<A> {
 
     fn answer_counted(&self, ray: &Ray, query: Query) -> (Option<Hit>, Counters) {
         self.ask(ray, query)
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.0.bounds()
+    }
+
+    fn ball_query_dyn(&self, mut query: &mut dyn BallQuery<Triangle>, counters: &mut Counters) {
+        self.0.ball_query(&mut query, counters);
+    }
+
+    fn closest_counted(&self, points: &[(Vec3, f32)]) -> (Vec<Option<PointHit>>, Counters) {
+        let mut answers = vec![None; points.len()];
+        let counters = answers
+            .par_chunks_mut(CHUNK)
+            .zip(points.par_chunks(CHUNK))
+            .map(|(out, points)| {
+                let mut c = Counters::default();
+                for (o, &(p, max)) in out.iter_mut().zip(points) {
+                    *o = self.0.closest_point_with(p, max, &mut c);
+                }
+                c
+            })
+            .reduce(Counters::default, Counters::merged);
+        (answers, counters)
+    }
+
+    fn closest_timed(&self, points: &[(Vec3, f32)]) -> usize {
+        points
+            .par_chunks(CHUNK)
+            .map(|points| {
+                points
+                    .iter()
+                    .filter(|&&(p, max)| self.0.closest_point(p, max).is_some())
+                    .count()
+            })
+            .sum()
     }
 
     fn trace(&self, ray: &Ray, query: Query) -> (Option<Hit>, Trace) {

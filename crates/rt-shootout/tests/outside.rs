@@ -69,6 +69,12 @@ impl Accel for DropsLast {
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
         self.intersect_with(ray, stats).is_some()
     }
+    fn bounds(&self) -> rt_core::Aabb {
+        self.0.bounds()
+    }
+    fn ball_query<Q: rt_core::BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.ball_query(query, stats);
+    }
     fn memory_bytes(&self) -> usize {
         self.0.memory_bytes()
     }

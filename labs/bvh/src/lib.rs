@@ -24,8 +24,8 @@
 #![allow(unused_imports, unused_variables)]
 
 use rt_core::{
-    Aabb, Accel, BuildStats, Hit, Primitive, Ray, Region, Stats, Triangle, ValidationError,
-    predicted_cost,
+    Aabb, Accel, BallQuery, BuildStats, Hit, Primitive, Ray, Region, Stats, Triangle,
+    ValidationError, predicted_cost,
 };
 
 pub mod step1;
@@ -297,6 +297,46 @@ impl Accel for LabBvh {
 
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
         step5::any_hit(self, ray, stats)
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.nodes.first().map_or(Aabb::EMPTY, |root| root.bounds)
+    }
+
+    /// Closest points are not a step of this lab. This answers them nearest box first: the
+    /// nearer child next, the other on a stack with its distance, skipped when popped if the
+    /// ball has shrunk below it.
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        let c = query.center();
+        let mut stack = vec![(0u32, 0.0f32)];
+        if self.nodes.is_empty() || self.nodes[0].bounds.distance_squared(c) > query.radius_sq() {
+            return;
+        }
+        while let Some((i, d)) = stack.pop() {
+            if d > query.radius_sq() {
+                continue;
+            }
+            stats.node_visit();
+            let node = &self.nodes[i as usize];
+            if node.is_leaf() {
+                for &id in &self.ids[node.first as usize..(node.first + node.count) as usize] {
+                    stats.prim_test();
+                    query.test(&self.tris[id as usize], id);
+                }
+                continue;
+            }
+            let mut children = self
+                .children(i)
+                .map(|k| (k, self.nodes[k as usize].bounds.distance_squared(c)));
+            if children[0].1 < children[1].1 {
+                children.swap(0, 1);
+            }
+            stack.extend(
+                children
+                    .into_iter()
+                    .filter(|&(_, d)| d <= query.radius_sq()),
+            );
+        }
     }
 
     fn memory_bytes(&self) -> usize {

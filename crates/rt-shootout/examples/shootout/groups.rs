@@ -1,6 +1,6 @@
 //! A small structure of the kind a student writes first, for the shootout example and its test.
 
-use rt_core::{Aabb, Accel, BuildStats, Hit, Primitive, Ray, Stats, Triangle};
+use rt_core::{Aabb, Accel, BallQuery, BuildStats, Hit, Primitive, Ray, Stats, Triangle};
 
 /// A one-level hierarchy: triangles sorted along x in groups of 16, each group with its box; a
 /// ray tests every group's box, then the triangles of the groups it enters.
@@ -64,6 +64,22 @@ impl Accel for Groups {
     }
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
         self.intersect_with(ray, stats).is_some()
+    }
+    fn bounds(&self) -> Aabb {
+        self.boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b))
+    }
+    /// Every group whose box the ball still reaches, in order.
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        for (g, b) in self.boxes.iter().enumerate() {
+            if b.distance_squared(query.center()) > query.radius_sq() {
+                continue;
+            }
+            stats.node_visit();
+            for (id, t) in &self.tris[g * GROUP..((g + 1) * GROUP).min(self.tris.len())] {
+                stats.prim_test();
+                query.test(t, *id);
+            }
+        }
     }
     fn memory_bytes(&self) -> usize {
         self.tris.capacity() * size_of::<(u32, Triangle)>()

@@ -16,7 +16,7 @@
 //! [`rt_core::Accel`] trait, so the conformance kit and the shootout can run your grid.
 
 use rt_core::glam::Vec3;
-use rt_core::{Aabb, Accel, BuildStats, Hit, Ray, Region, Stats, Triangle};
+use rt_core::{Aabb, Accel, BallQuery, BuildStats, Hit, Ray, Region, Stats, Triangle};
 
 pub mod step1;
 pub mod step2;
@@ -158,6 +158,38 @@ impl Accel for LabGrid {
 
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
         step5::any_hit(self, ray, stats)
+    }
+
+    fn bounds(&self) -> Aabb {
+        if self.refs.is_empty() {
+            Aabb::EMPTY
+        } else {
+            self.bounds
+        }
+    }
+
+    /// Closest points are not a step of this lab. This answers them simply and correctly: every
+    /// cell the ball still reaches, in index order (`rt-grid` visits cells in growing shells
+    /// around the point instead).
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        if self.refs.is_empty() {
+            return;
+        }
+        for z in 0..self.res[2] {
+            for y in 0..self.res[1] {
+                for x in 0..self.res[0] {
+                    let c = [x, y, z];
+                    if self.cell_box(c).distance_squared(query.center()) > query.radius_sq() {
+                        continue;
+                    }
+                    stats.node_visit();
+                    for &id in self.cell(c) {
+                        stats.prim_test();
+                        query.test(&self.tris[id as usize], id);
+                    }
+                }
+            }
+        }
     }
 
     fn memory_bytes(&self) -> usize {

@@ -18,7 +18,7 @@
 //! steps into the [`rt_core::Accel`] trait, so the conformance kit and the shootout can run
 //! your traversal.
 
-use rt_core::{Accel, BuildStats, Hit, Ray, Region, Stats, Triangle};
+use rt_core::{Aabb, Accel, BallQuery, BuildStats, Hit, Ray, Region, Stats, Triangle};
 use rt_kdtree::{KdParams, KdTree};
 
 pub use rt_kdtree::{MAX_DEPTH, Node};
@@ -88,6 +88,15 @@ impl Accel for LabKdTree {
 
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
         step5::any_hit(self, ray, stats)
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.tree.bounds()
+    }
+
+    /// Closest points are not a step of this lab: `rt-kdtree`'s own query answers them.
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.tree.ball_query(query, stats);
     }
 
     fn memory_bytes(&self) -> usize {

@@ -1,0 +1,185 @@
+//! Ball queries (closest point): nearest box first, pruned by the query's shrinking radius.
+
+use crate::node::{ChildRef, WIDTH, WideNode};
+use crate::simd::Stack;
+use crate::traverse::WIDE_STACK;
+use crate::{Bvh, MAX_DEPTH};
+use rt_core::glam::Vec3;
+use rt_core::{Aabb, BallQuery, Primitive, Stats, TriangleTest};
+
+impl<P: Primitive> Bvh<P> {
+    /// The box around everything in the tree.
+    pub(crate) fn root_bounds(&self) -> Aabb {
+        if let Some(root) = self.binary.first() {
+            return root.bounds;
+        }
+        self.wide.first().map_or(Aabb::EMPTY, |root| {
+            (0..WIDTH)
+                .filter(|&i| root.child(i) != ChildRef::EMPTY)
+                .fold(Aabb::EMPTY, |b, i| b.union(root.child_bounds(i)))
+        })
+    }
+
+    /// The binary tree's ball query: at an interior node the child whose box is nearer to the
+    /// centre is visited next and the other pushed with its distance; a popped entry is skipped
+    /// when the ball has shrunk below it. One stack entry per level, as for rays.
+    pub(crate) fn ball_binary<Q: BallQuery<P>, S: Stats>(&self, q: &mut Q, stats: &mut S) {
+        let nodes = &self.binary[..];
+        let c = q.center();
+        if self.ids.is_empty() || nodes[0].bounds.distance_squared(c) > q.radius_sq() {
+            return;
+        }
+        let mut stack = [(0u32, 0.0f32); MAX_DEPTH];
+        let mut sp = 0;
+        let mut current = 0usize;
+        loop {
+            stats.node_visit();
+            let node = &nodes[current];
+            if node.is_leaf() {
+                let range = node.prim_range();
+                for (prim, &id) in self.prims[range.clone()].iter().zip(&self.ids[range]) {
+                    stats.prim_test();
+                    q.test(prim, id);
+                }
+            } else {
+                let (a, b) = (current + 1, node.index as usize);
+                let da = nodes[a].bounds.distance_squared(c);
+                let db = nodes[b].bounds.distance_squared(c);
+                let (near, d_near, far, d_far) = if da <= db {
+                    (a, da, b, db)
+                } else {
+                    (b, db, a, da)
+                };
+                let r = q.radius_sq();
+                if d_near <= r {
+                    if d_far <= r {
+                        stack[sp] = (far as u32, d_far);
+                        sp += 1;
+                    }
+                    current = near;
+                    continue;
+                }
+            }
+            // Pop the next subtree that still meets the ball.
+            loop {
+                if sp == 0 {
+                    return;
+                }
+                sp -= 1;
+                let (index, d) = stack[sp];
+                if d <= q.radius_sq() {
+                    current = index as usize;
+                    break;
+                }
+            }
+        }
+    }
+
+    /// The wide tree's ball query: the children of a node that meet the ball are sorted by
+    /// distance; the nearest is visited next and the others pushed farthest first, each
+    /// skipped when popped if the ball has shrunk below it. Triangle packs are offered lane by
+    /// lane as the triangles they store.
+    pub(crate) fn ball_wide<Q: BallQuery<P>, S: Stats>(&self, q: &mut Q, stats: &mut S) {
+        let nodes = &self.wide[..];
+        let c = q.center();
+        if nodes.is_empty() {
+            return;
+        }
+        let mut stack = Stack::<(u32, f32), WIDE_STACK>::new();
+        let mut current = ChildRef::node(0);
+        loop {
+            stats.node_visit();
+            if current.is_leaf() {
+                self.offer_leaf(current.items(), q, stats);
+            } else {
+                let node = &nodes[current.index()];
+                let d = distances(node, c);
+                let r = q.radius_sq();
+                // The children in the ball, nearest first (insertion sort of at most eight).
+                let mut order = [(0u32, 0.0f32); WIDTH];
+                let mut n = 0;
+                for (i, &di) in d.iter().enumerate() {
+                    if di <= r && node.children[i] != ChildRef::EMPTY.0 {
+                        let mut k = n;
+                        while k > 0 && order[k - 1].1 > di {
+                            order[k] = order[k - 1];
+                            k -= 1;
+                        }
+                        order[k] = (node.children[i], di);
+                        n += 1;
+                    }
+                }
+                if n > 0 {
+                    for &entry in order[1..n].iter().rev() {
+                        stack.push(entry);
+                    }
+                    current = ChildRef(order[0].0);
+                    continue;
+                }
+            }
+            loop {
+                let Some((child, d)) = stack.pop() else {
+                    return;
+                };
+                if d <= q.radius_sq() {
+                    current = ChildRef(child);
+                    break;
+                }
+            }
+        }
+    }
+
+    /// Offers a wide leaf's items: triangle packs when the tree has them, else primitives.
+    fn offer_leaf<Q: BallQuery<P>, S: Stats>(
+        &self,
+        items: std::ops::Range<usize>,
+        q: &mut Q,
+        stats: &mut S,
+    ) {
+        let Some(test) = self.test.filter(|_| !self.packs.is_empty()) else {
+            for (prim, &id) in self.prims[items.clone()].iter().zip(&self.ids[items]) {
+                stats.prim_test();
+                q.test(prim, id);
+            }
+            return;
+        };
+        for pack in &self.packs[items] {
+            for lane in 0..pack.len() {
+                stats.prim_test();
+                let row = |k: usize| {
+                    Vec3::new(
+                        pack.rows[3 * k][lane],
+                        pack.rows[3 * k + 1][lane],
+                        pack.rows[3 * k + 2][lane],
+                    )
+                };
+                // Watertight packs hold the vertices, Möller–Trumbore packs the vertex and
+                // edges, each computed as `Triangle::closest_point` computes them.
+                let (v0, e1, e2) = match test {
+                    TriangleTest::Watertight => (row(0), row(1) - row(0), row(2) - row(0)),
+                    TriangleTest::MollerTrumbore => (row(0), row(1), row(2)),
+                };
+                q.test_triangle(v0, e1, e2, pack.ids[lane]);
+            }
+        }
+    }
+}
+
+/// The squared distance from `c` to each child box of `node` (`+inf` for unused lanes, whose
+/// boxes are empty), lane by lane over the rows so the compiler can vectorize it.
+#[inline(always)]
+fn distances(node: &WideNode, c: Vec3) -> [f32; WIDTH] {
+    let b = &node.bounds;
+    let mut d = [0.0f32; WIDTH];
+    for (i, out) in d.iter_mut().enumerate() {
+        let mut sum = 0.0;
+        for axis in 0..3 {
+            let below = b[axis][i] - c[axis];
+            let above = c[axis] - b[axis + 3][i];
+            let g = below.max(above).max(0.0);
+            sum += g * g;
+        }
+        *out = sum;
+    }
+    d
+}

@@ -370,18 +370,7 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
     let mut built: Vec<Box<dyn Traceable>> = Vec::new();
     for entry in &entries {
         progress.step(format!("building {}", entry.name));
-        // Builds are timed like traces: the fastest of `repeats`, since a single build on a
-        // shared host can be 20% off (the structure is the same every time).
-        let mut build_ms = f64::INFINITY;
-        let mut s = None;
-        for _ in 0..args.repeats.max(1) {
-            drop(s.take());
-            let t = Instant::now();
-            let built = (entry.build)(&tris);
-            build_ms = build_ms.min(t.elapsed().as_secs_f64() * 1e3);
-            s = Some(built);
-        }
-        let s = s.expect("built at least once");
+        let (s, build_ms) = build_fastest(entry, &tris, args.repeats);
         progress.done();
         progress.step(format!("tracing {}", entry.name));
         let mut row = trace_row(
@@ -478,6 +467,26 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
         point_disagreements: Vec::new(),
         per_ray_answers: args.rays_file.is_some(),
     })
+}
+
+/// Builds `entry` over `tris` `repeats` times (at least once) and keeps the last structure with
+/// the fastest build's time in milliseconds. Builds are timed like traces, since a single build
+/// on a shared host can be 20% off (the structure is the same every time).
+fn build_fastest(
+    entry: &structures::Entry,
+    tris: &[Triangle],
+    repeats: u32,
+) -> (Box<dyn Traceable>, f64) {
+    let mut build_ms = f64::INFINITY;
+    let mut s = None;
+    for _ in 0..repeats.max(1) {
+        drop(s.take());
+        let t = Instant::now();
+        let built = (entry.build)(tris);
+        build_ms = build_ms.min(t.elapsed().as_secs_f64() * 1e3);
+        s = Some(built);
+    }
+    (s.expect("built at least once"), build_ms)
 }
 
 /// The queries brute force checks: every one when there are at most `check`, else a

@@ -4,7 +4,7 @@
 //! subset, the rows are checked against each other on every point, and brute force settles
 //! every point on which they disagree, as for rays.
 
-use super::{Args, Report, Row, checked_subset, load_scene};
+use super::{Args, Report, Row, build_fastest, checked_subset, load_scene};
 use crate::structures::{self, Traceable};
 use rt_core::glam::Vec3;
 use rt_core::{Aabb, PointHit, Primitive, raygen};
@@ -58,23 +58,14 @@ pub(super) fn measure(
     let mut rows = Vec::new();
     let mut answers = Vec::new();
     for entry in &entries {
-        let mut build_ms = f64::INFINITY;
-        let mut s = None;
-        for _ in 0..args.repeats.max(1) {
-            drop(s.take());
-            let t = Instant::now();
-            let built = (entry.build)(&tris);
-            build_ms = build_ms.min(t.elapsed().as_secs_f64() * 1e3);
-            s = Some(built);
-        }
-        let s = s.expect("built at least once");
+        let (s, build_ms) = build_fastest(entry, &tris, args.repeats);
         let (row, found) = query_row(&entry.name, s.as_ref(), build_ms, &queries, args.repeats);
         rows.push(row);
         answers.push(found);
     }
-    let brute = (structures::brute_force().build)(&tris);
+    let (brute, build_ms) = build_fastest(&structures::brute_force(), &tris, 1);
     let (mut brute_row, brute_found) =
-        query_row("brute-force", brute.as_ref(), 0.0, &subset_queries, 0);
+        query_row("brute-force", brute.as_ref(), build_ms, &subset_queries, 0);
 
     let mut disagreements = Vec::new();
     let mut record = |rows: &mut [Row], i: usize, expected: Option<PointHit>| {

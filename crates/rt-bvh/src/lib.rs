@@ -96,6 +96,19 @@
 //! distance so far is smaller. Triangle packs are read back lane by lane. On the bunny, 100,000
 //! points (`cargo xtask compare --query closest-point --scene ../shared/meshes/stanford-bunny.obj --structures bvh,kdtree,grid,hgrid,octree`): 33.7 visits and 84.5 triangle tests per query, 308 times brute force's speed.
 //!
+//! # Instances
+//! [`Instances`] is the top level of a two-level scene: a binary SAH BVH (one instance per leaf,
+//! an instance priced at 8 node visits) over the world boxes of [`rt_core::Instance`]s, each a
+//! built structure of any kind (shared, never copied) with an affine transform. The walk is near
+//! child first; at each instance the ray is carried into object space and the bottom level
+//! traced up to the best hit so far. Node boxes are tested grown by
+//! [`InstanceTransform::ray_pad`](rt_core::InstanceTransform::ray_pad), so the rounding of that
+//! transform never culls an instance holding a hit, and the answers equal
+//! [`LinearInstances`](rt_core::LinearInstances)'s exactly. Per instance: 192 bytes for the
+//! record and about 97 for the top level. On 1,000 bunnies (`cargo xtask compare --scene
+//! ../shared/meshes/stanford-bunny.obj --instances 1000`), against one bunny: 1.07× the memory,
+//! 1.02× to 1.06× the build time, 0 mismatches for every bottom-level structure.
+//!
 //! # Measured
 //! Against Embree 3.13 (build quality medium, its default; scene flags default), single-threaded
 //! traces of the same triangles and rays (1024×768 per set), one run of `cargo bench -p
@@ -177,6 +190,7 @@
 #![warn(missing_docs)]
 
 mod builder;
+mod instance;
 mod kernels;
 mod nearest;
 mod node;
@@ -185,6 +199,7 @@ mod simd;
 mod traverse;
 mod validate;
 
+pub use instance::Instances;
 pub use node::{ChildRef, Node, PACK, TriPack, WIDTH, WideNode};
 pub use validate::ValidationError;
 

@@ -34,6 +34,12 @@ use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 use std::fmt;
 
+mod instances;
+pub use instances::{
+    BottomBuilder, InstancedCase, Placement, TWO_LEVEL_SCENES, check_two_level_case,
+    check_two_level_random, check_two_level_scene, two_level_scene,
+};
+
 /// A disagreement between a structure and brute force on one ray.
 #[derive(Clone, Debug)]
 pub struct Mismatch {
@@ -425,7 +431,7 @@ fn check_queries<A: Accel + 'static>(
 ) -> Result<(), String> {
     let (params, prims, rays) = (params.clone(), prims.to_vec(), rays.to_vec());
     let scene = scene_summary(&prims);
-    watched::<A>(stall, &scene, move |probe| {
+    watched(A::NAME, stall, &scene, move |probe| {
         probe.building(prims.len());
         let reference = BruteForce::build(&prims, &());
         let accel = A::build(&prims, &params);
@@ -515,7 +521,8 @@ impl Probe {
 
 /// Runs `work` on its own thread and waits for it; a step (see [`Probe`]) that takes longer
 /// than `stall`, or a panic, becomes an error naming what the worker was doing.
-fn watched<A: Accel>(
+fn watched(
+    name: &'static str,
     stall: std::time::Duration,
     scene: &str,
     work: impl FnOnce(&Probe) -> Result<(), String> + Send + 'static,
@@ -525,7 +532,7 @@ fn watched<A: Accel>(
     let (tx, rx) = std::sync::mpsc::channel();
     let worker_probe = probe.clone();
     let spawned = std::thread::Builder::new()
-        .name(format!("conformance {}", A::NAME))
+        .name(format!("conformance {}", name))
         .spawn(move || {
             let result =
                 std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| work(&worker_probe)));
@@ -549,12 +556,12 @@ fn watched<A: Accel>(
                     .unwrap_or_else(|| "a panic without a message".into());
                 return Err(format!(
                     "{} panicked: {message}\n  while: {}{scene}",
-                    A::NAME,
+                    name,
                     probe.doing()
                 ));
             }
             Err(std::sync::mpsc::RecvTimeoutError::Disconnected) => {
-                return Err(format!("{}: the kit's worker thread vanished", A::NAME));
+                return Err(format!("{}: the kit's worker thread vanished", name));
             }
             Err(std::sync::mpsc::RecvTimeoutError::Timeout) => {
                 let steps = probe.steps.load(Ordering::Acquire);
@@ -563,7 +570,7 @@ fn watched<A: Accel>(
                 } else if last.1.elapsed() >= stall {
                     return Err(format!(
                         "{} {STALL_MARK} {:.0?} (a loop that never ends?)\n  while: {}{scene}",
-                        A::NAME,
+                        name,
                         stall,
                         probe.doing()
                     ));

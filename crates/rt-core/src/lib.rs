@@ -26,6 +26,13 @@
 //! whose ball shrinks as primitives are found; [`ClosestPointQuery`] is the standard one, and
 //! callers can write others (a transformed instance, all primitives within a radius).
 //!
+//! # Instances
+//! A two-level scene places built structures (any [`Accel`], behind [`Bottom`], kinds mixed) with
+//! affine transforms: [`Instance`], [`TwoLevel`], the reference [`LinearInstances`], and rt-bvh's
+//! `Instances` with a BVH over the instances. Hits ([`InstanceHit`]) name the instance, its id and
+//! the primitive in the bottom level's own input; see the module documentation of [`instance`] for
+//! what is exact and what rounds.
+//!
 //! # Conventions
 //! - A hit is the smallest `t` in the ray's closed interval `[t_min, t_max]`; equal `t` goes to
 //!   the smaller primitive index ([`Hit::beats`]). The answer is unique, so structures can be
@@ -44,6 +51,7 @@ mod clip;
 mod closest;
 mod cost;
 mod gltf;
+pub mod instance;
 pub mod leaf;
 mod load;
 mod mailbox;
@@ -75,6 +83,11 @@ pub use closest::{
     BallQuery, ClosestPointQuery, PointHit, closest_point_on_triangle, point_distance,
 };
 pub use cost::{PredictedCost, predicted_cost};
+pub use instance::{
+    Bottom, Instance, InstanceError, InstanceHit, InstancePointHit, InstancePointQuery,
+    InstanceTransform, LinearInstances, TransformPrimitive, TwoLevel, bottom_bytes,
+    closest_point_on_transformed_triangle, scene_margins,
+};
 pub use load::{LoadError, LoadErrorKind, SceneFormat, load_mesh, load_mesh_bytes};
 pub use mailbox::Mailbox;
 pub use mesh::{Mesh, MeshError, Shading};

@@ -24,9 +24,15 @@ impl Camera {
     /// vertical field of view, as close as it can while every corner of the box stays in a
     /// `width × height` image.
     pub fn framing(bounds: &Aabb, width: u32, height: u32) -> Self {
+        Self::framing_from(bounds, Vec3::new(0.15, 0.3, 1.0), width, height)
+    }
+
+    /// [`Camera::framing`] from the direction `back` (from the box's centre towards the eye;
+    /// need not be unit length): a field of instances on the ground, say, seen from above.
+    pub fn framing_from(bounds: &Aabb, back: Vec3, width: u32, height: u32) -> Self {
         let vfov_deg = 40.0f32;
         let center = bounds.center();
-        let back = Vec3::new(0.15, 0.3, 1.0).normalize();
+        let back = back.try_normalize().unwrap_or(Vec3::Z);
         let forward = -back;
         let right = forward.cross(Vec3::Y).normalize();
         let up = right.cross(forward);

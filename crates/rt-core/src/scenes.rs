@@ -128,6 +128,13 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
         }),
     },
     BuiltinScene {
+        name: "teapot",
+        description: "the 44k-triangle procedural teapot alone, 5 units wide: the mesh `compare --instances` fields; sized: finer or coarser",
+        default_size: 44_160,
+        make: |n| teapot_with_detail(0.0, (n.max(1_000) as f64 / 44_160.0).sqrt() as f32),
+        camera: None,
+    },
+    BuiltinScene {
         name: "terrain",
         description: "a 100k-triangle height field of rolling hills over a unit square: large, even, realistic input for build time and memory",
         default_size: 100_000,
@@ -511,6 +518,48 @@ fn soup(count: usize, seed: u64, scale: f32) -> Mesh {
         .map(|i| [3 * i, 3 * i + 1, 3 * i + 2])
         .collect();
     Mesh::new(positions, indices).expect("random_soup indices are in range by construction")
+}
+
+/// Where a field of `count` instances of an object with bounds `object` stands: transforms
+/// (object space to world) on a square grid in the x-z plane, 1.2 object sizes apart, each
+/// turned about y by a random angle and tilted by up to 0.2 radians, scaled by 0.75 to 1.25 on
+/// each axis independently, and every seventh mirrored (x scaled by a negative factor); drawn
+/// from `seed`. What `cargo xtask compare --instances` traces.
+pub fn instance_field(object: &crate::Aabb, count: usize, seed: u64) -> Vec<glam::Affine3A> {
+    use glam::{Affine3A, Quat};
+    let mut rng = Rng::new(seed ^ 0xf1e1d);
+    let size = if object.is_empty() {
+        1.0
+    } else {
+        object.extent().max_element().max(f32::MIN_POSITIVE)
+    };
+    let center = if object.is_empty() {
+        Vec3::ZERO
+    } else {
+        object.center()
+    };
+    let side = (count as f64).sqrt().ceil().max(1.0) as usize;
+    (0..count)
+        .map(|k| {
+            let at = Vec3::new((k % side) as f32, 0.0, (k / side) as f32) * (1.2 * size);
+            let mut scale = Vec3::new(
+                rng.range(0.75, 1.25),
+                rng.range(0.75, 1.25),
+                rng.range(0.75, 1.25),
+            );
+            if k % 7 == 6 {
+                scale.x = -scale.x;
+            }
+            let tilt_axis = Vec3::new(rng.range(-1.0, 1.0), 0.0, rng.range(-1.0, 1.0))
+                .try_normalize()
+                .unwrap_or(Vec3::X);
+            let turn = Quat::from_axis_angle(tilt_axis, rng.range(-0.2, 0.2))
+                * Quat::from_rotation_y(rng.range(0.0, std::f32::consts::TAU));
+            Affine3A::from_translation(at)
+                * Affine3A::from_scale_rotation_translation(scale, turn, Vec3::ZERO)
+                * Affine3A::from_translation(-center)
+        })
+        .collect()
 }
 
 #[cfg(test)]

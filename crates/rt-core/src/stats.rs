@@ -16,6 +16,12 @@ pub trait Stats {
     /// `if S::TRACE`, so a sink that leaves it `false` pays nothing for them.
     const TRACE: bool = false;
 
+    /// Whether this sink records anything. Layers that call structures through trait objects
+    /// (the instances of a two-level scene, see [`Bottom`](crate::Bottom)) cannot pass a generic
+    /// sink down; they take the uncounted path when this is `false` (as for [`NoStats`]) and
+    /// otherwise count into [`Counters`] and hand them over with [`Stats::add`].
+    const COUNTS: bool = true;
+
     /// A node (or cell) was entered.
     fn node_visit(&mut self);
     /// A primitive was intersected.
@@ -23,6 +29,19 @@ pub trait Stats {
     /// A primitive test was skipped because a mailbox showed the primitive was already tested.
     #[inline(always)]
     fn mailbox_skip(&mut self) {}
+    /// Counts gathered elsewhere (by a structure called through a trait object), added as if
+    /// each event had been reported here.
+    fn add(&mut self, counters: &Counters) {
+        for _ in 0..counters.node_visits {
+            self.node_visit();
+        }
+        for _ in 0..counters.prim_tests {
+            self.prim_test();
+        }
+        for _ in 0..counters.mailbox_skips {
+            self.mailbox_skip();
+        }
+    }
     /// One step of the walk, with its context; called only when [`Stats::TRACE`] is true.
     #[inline(always)]
     fn event(&mut self, event: crate::trace::Event) {
@@ -35,6 +54,9 @@ pub trait Stats {
 pub struct NoStats;
 
 impl Stats for NoStats {
+    const COUNTS: bool = false;
+    #[inline(always)]
+    fn add(&mut self, _: &Counters) {}
     #[inline(always)]
     fn node_visit(&mut self) {}
     #[inline(always)]
@@ -64,6 +86,10 @@ impl Counters {
 }
 
 impl Stats for Counters {
+    #[inline]
+    fn add(&mut self, c: &Counters) {
+        *self = self.merged(*c);
+    }
     #[inline(always)]
     fn node_visit(&mut self) {
         self.node_visits += 1;

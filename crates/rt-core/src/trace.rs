@@ -164,6 +164,9 @@ impl Stats for Trace {
     fn mailbox_skip(&mut self) {
         self.counters.mailbox_skip();
     }
+    fn add(&mut self, counters: &Counters) {
+        self.counters.add(counters);
+    }
     fn event(&mut self, event: Event) {
         self.events.push(event);
     }

@@ -1,7 +1,7 @@
 //! The conformance kit never hangs and always names the ray: structures that loop forever or
 //! panic on one ray fail with a short message naming that ray.
 
-use rt_core::conformance::{check_case_within, check_random, scene};
+use rt_core::conformance::{self, check_case_within, check_random, scene};
 use rt_core::glam::Vec3;
 use rt_core::{Aabb, Accel, BallQuery, BruteForce, BuildStats, Hit, Ray, Stats, Triangle};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -201,4 +201,71 @@ fn the_test_macro_lists_every_scene_of_the_kit() {
     let list = &list[list.find(';').unwrap() + 1..list.find(')').unwrap()];
     let listed: Vec<&str> = list.split_whitespace().collect();
     assert_eq!(listed, rt_core::conformance::SCENES);
+}
+
+/// The linear reference with one fault: it never looks at the instance at index 1, or it
+/// reports a hit's `t` a little late.
+struct SkipsOne<const LATE: bool>(rt_core::LinearInstances<Triangle>);
+
+impl<const LATE: bool> rt_core::TwoLevel<Triangle> for SkipsOne<LATE> {
+    const NAME: &'static str = "skips-one";
+    fn build(mut instances: Vec<rt_core::Instance<Triangle>>) -> Self {
+        if !LATE && instances.len() > 1 {
+            // Instance 1 moved far away, where no ray of the kit goes.
+            let far = rt_core::glam::Affine3A::from_translation(rt_core::glam::Vec3::splat(1e6));
+            instances[1] =
+                rt_core::Instance::new(instances[1].bottom().clone(), far, instances[1].id())
+                    .unwrap();
+        }
+        Self(rt_core::LinearInstances::build(instances))
+    }
+    fn instances(&self) -> &[rt_core::Instance<Triangle>] {
+        self.0.instances()
+    }
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<rt_core::InstanceHit> {
+        self.0
+            .intersect_with(ray, stats)
+            .map(|h| rt_core::InstanceHit {
+                t: if LATE { h.t * 1.001 } else { h.t },
+                ..h
+            })
+    }
+    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+        self.0.occluded_with(ray, stats)
+    }
+    fn closest_point_with<S: Stats>(
+        &self,
+        point: rt_core::glam::Vec3,
+        max_distance: f32,
+        stats: &mut S,
+    ) -> Option<rt_core::InstancePointHit> {
+        self.0.closest_point_with(point, max_distance, stats)
+    }
+    fn bounds(&self) -> rt_core::Aabb {
+        self.0.bounds()
+    }
+    fn memory_bytes(&self) -> usize {
+        self.0.memory_bytes()
+    }
+}
+
+fn brute_bottom(t: &[Triangle]) -> std::sync::Arc<dyn rt_core::Bottom<Triangle>> {
+    std::sync::Arc::new(BruteForce::build(t, &()))
+}
+
+#[test]
+fn a_two_level_scene_that_loses_an_instance_or_a_t_fails_with_its_ray_named() {
+    let case = conformance::two_level_scene("mirrored_and_scaled").remove(0);
+    let lost = conformance::check_two_level_case::<SkipsOne<false>>(&[brute_bottom], &case)
+        .expect_err("an instance that moved away must be missed");
+    assert!(
+        lost.contains("disagrees with the linear reference") && lost.contains("ray: Ray::"),
+        "{lost}"
+    );
+    let late = conformance::check_two_level_case::<SkipsOne<true>>(&[brute_bottom], &case)
+        .expect_err("a late t must be caught");
+    assert!(late.contains("intersect disagrees"), "{late}");
+    // The reference itself passes.
+    conformance::check_two_level_case::<rt_core::LinearInstances<Triangle>>(&[brute_bottom], &case)
+        .expect("the linear reference agrees with itself and with the flattened scene");
 }

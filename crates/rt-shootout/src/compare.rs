@@ -8,10 +8,10 @@
 
 use crate::structures::{self, Query, Traceable};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use rt_bvh::{Bvh, BvhParams};
+use rt_bvh::Bvh;
 use rt_core::raygen;
 use rt_core::scenes::{self, BUILTIN_SCENES};
-use rt_core::{Aabb, Accel, Hit, PredictedCost, Primitive, Ray, Rng, Triangle, predicted_cost};
+use rt_core::{Aabb, Hit, PredictedCost, Primitive, Ray, Rng, Triangle, predicted_cost};
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -69,6 +69,12 @@ pub struct Args {
     /// Closest-point queries: the largest distance searched [default: no limit].
     #[arg(long, value_name = "D")]
     pub max_distance: Option<f32>,
+    /// Trace a field of N instances of the scene instead (on a square grid, each rotated,
+    /// scaled unevenly, every seventh mirrored): a two-level scene. Each row's structure is
+    /// built once over the mesh and instanced under rt-bvh's `Instances`; brute force visits
+    /// every instance. Rays only.
+    #[arg(long, value_name = "N")]
+    pub instances: Option<usize>,
     /// Which rays to trace [default: primary].
     #[arg(long, value_enum)]
     pub rays: Option<RayKind>,
@@ -94,8 +100,10 @@ pub struct Args {
     #[arg(long)]
     pub rays_file: Option<PathBuf>,
     /// How many rays brute force checks (a random subset; all rays if there are fewer).
-    #[arg(long, default_value_t = 20_000)]
-    pub check_rays: usize,
+    /// [default: 20,000; 1,000 with --instances, where one brute-force ray tests every
+    /// triangle of each instance whose box it enters]
+    #[arg(long)]
+    pub check_rays: Option<usize>,
     /// Seed for incoherent rays and for the checked subset.
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
@@ -341,20 +349,20 @@ impl Progress {
 }
 
 fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Result<Report, String> {
-    let (scene, tris) = load_scene(&args.scene)?;
-    let valid: Vec<&Triangle> = tris.iter().filter(|t| t.is_valid()).collect();
-    if valid.is_empty() {
+    let source = Source::load(args)?;
+    let scene = source.label.clone();
+    if source.valid == 0 {
         return Err(format!(
             "{scene}: no valid triangles (all {} are degenerate or non-finite)",
-            tris.len()
+            source.mesh.len()
         ));
     }
-    let bounds = valid.iter().fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+    let bounds = source.bounds;
     if args.width == 0 || args.height == 0 {
         return Err("--width and --height must be at least 1".into());
     }
 
-    let (rays, ray_kind, query) = make_rays(args, &tris, &bounds)?;
+    let (rays, ray_kind, query) = make_rays(args, &source)?;
     if rays.is_empty() {
         return Err(format!("no rays to trace ({ray_kind} rays on {scene})"));
     }
@@ -363,14 +371,19 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
         std::io::stdout().is_terminal() && !args.json,
     );
 
-    let subset = checked_subset(rays.len(), args.check_rays, args.seed);
+    let check = args.check_rays.unwrap_or(if source.field.is_some() {
+        1_000
+    } else {
+        20_000
+    });
+    let subset = checked_subset(rays.len(), check, args.seed);
     let subset_rays: Vec<Ray> = subset.iter().map(|&i| rays[i]).collect();
 
     let mut rows = Vec::new();
     let mut built: Vec<Box<dyn Traceable>> = Vec::new();
     for entry in &entries {
         progress.step(format!("building {}", entry.name));
-        let (s, build_ms) = build_fastest(entry, &tris, args.repeats);
+        let (s, build_ms) = build_fastest(|| source.build(entry), args.repeats)?;
         progress.done();
         progress.step(format!("tracing {}", entry.name));
         let mut row = trace_row(
@@ -390,7 +403,7 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
     progress.step(format!("brute force on {} rays", subset_rays.len()));
     let brute_entry = structures::brute_force();
     let t = Instant::now();
-    let brute = (brute_entry.build)(&tris);
+    let brute = source.build(&brute_entry)?;
     let build_ms = t.elapsed().as_secs_f64() * 1e3;
     // One pass for brute force: its counters cost nothing next to N primitive tests per ray, so
     // the counted pass is also the timed one.
@@ -456,8 +469,8 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
     all_rows.extend(rows);
     Ok(Report {
         scene,
-        triangles: tris.len(),
-        valid_triangles: valid.len(),
+        triangles: source.triangles,
+        valid_triangles: source.valid,
         ray_kind,
         rays: rays.len(),
         threads,
@@ -469,24 +482,121 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
     })
 }
 
-/// Builds `entry` over `tris` `repeats` times (at least once) and keeps the last structure with
+/// Builds a row `repeats` times (at least once) with `build` and keeps the last structure with
 /// the fastest build's time in milliseconds. Builds are timed like traces, since a single build
 /// on a shared host can be 20% off (the structure is the same every time).
 fn build_fastest(
-    entry: &structures::Entry,
-    tris: &[Triangle],
+    build: impl Fn() -> Result<Box<dyn Traceable>, String>,
     repeats: u32,
-) -> (Box<dyn Traceable>, f64) {
+) -> Result<(Box<dyn Traceable>, f64), String> {
     let mut build_ms = f64::INFINITY;
     let mut s = None;
     for _ in 0..repeats.max(1) {
         drop(s.take());
         let t = Instant::now();
-        let built = (entry.build)(tris);
+        let built = build()?;
         build_ms = build_ms.min(t.elapsed().as_secs_f64() * 1e3);
         s = Some(built);
     }
-    (s.expect("built at least once"), build_ms)
+    Ok((s.expect("built at least once"), build_ms))
+}
+
+/// What the rows are built over: a scene's triangles, or a field of instances of them
+/// (`--instances`).
+pub(crate) struct Source {
+    /// The scene's name as the report shows it.
+    pub label: String,
+    /// The scene's triangles (the one mesh every instance shares, for a field).
+    pub mesh: std::sync::Arc<[Triangle]>,
+    /// The field's transforms, if it is one.
+    pub field: Option<Vec<rt_core::glam::Affine3A>>,
+    /// Triangles in the scene, every instance counted.
+    pub triangles: usize,
+    /// Valid triangles, every instance counted.
+    pub valid: usize,
+    /// The box around the valid triangles (in the world).
+    pub bounds: Aabb,
+}
+
+impl Source {
+    /// The scene `args.scene`, fielded if `args.instances` asks for it.
+    pub(crate) fn load(args: &Args) -> Result<Self, String> {
+        let (scene, tris) = load_scene(&args.scene)?;
+        let valid = tris.iter().filter(|t| t.is_valid()).count();
+        let bounds = tris
+            .iter()
+            .filter(|t| t.is_valid())
+            .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+        let mesh: std::sync::Arc<[Triangle]> = tris.into();
+        let Some(count) = args.instances else {
+            return Ok(Self {
+                label: scene,
+                triangles: mesh.len(),
+                mesh,
+                field: None,
+                valid,
+                bounds,
+            });
+        };
+        if !(1..=1_000_000).contains(&count) {
+            return Err(format!(
+                "--instances must be from 1 to 1000000, not {count}"
+            ));
+        }
+        let field = scenes::instance_field(&bounds, count, args.seed);
+        let mut world = Aabb::EMPTY;
+        for xf in &field {
+            let t = rt_core::InstanceTransform::new(*xf).map_err(|e| e.to_string())?;
+            world = world.union(t.world_bounds(&bounds).0);
+        }
+        Ok(Self {
+            label: format!("{scene} × {count}"),
+            triangles: mesh.len() * count,
+            valid: valid * count,
+            mesh,
+            field: Some(field),
+            bounds: world,
+        })
+    }
+
+    /// `entry`'s structure over the scene: built over the triangles, or built once over the mesh
+    /// and instanced under rt-bvh's `Instances` (brute force: the linear reference, which
+    /// visits every instance).
+    pub(crate) fn build(&self, entry: &structures::Entry) -> Result<Box<dyn Traceable>, String> {
+        let Some(field) = &self.field else {
+            return Ok((entry.build)(&self.mesh));
+        };
+        Ok(if entry.name == "brute-force" {
+            Box::new(
+                structures::Field::<rt_core::LinearInstances<Triangle>>::new(
+                    self.mesh.clone(),
+                    field,
+                    &entry.build_bottom,
+                )?,
+            )
+        } else {
+            Box::new(structures::Field::<rt_bvh::Instances<Triangle>>::new(
+                self.mesh.clone(),
+                field,
+                &entry.build_bottom,
+            )?)
+        })
+    }
+
+    /// The world-space triangle a row's hit names (`instance · mesh length + primitive` in a
+    /// field).
+    fn world_triangle(&self, prim: u32) -> Triangle {
+        let n = self.mesh.len();
+        match &self.field {
+            None => self.mesh[prim as usize],
+            Some(field) => {
+                let (k, i) = (prim as usize / n, prim as usize % n);
+                let t = self.mesh[i];
+                let w = |v| field[k].transform_point3(v);
+                Triangle::new(w(t.v0), w(t.v1), w(t.v2))
+            }
+        }
+    }
 }
 
 /// The queries brute force checks: every one when there are at most `check`, else a
@@ -506,11 +616,7 @@ fn checked_subset(len: usize, check: usize, seed: u64) -> Vec<usize> {
     idx
 }
 
-fn make_rays(
-    args: &Args,
-    tris: &[Triangle],
-    bounds: &Aabb,
-) -> Result<(Vec<Ray>, &'static str, Query), String> {
+fn make_rays(args: &Args, source: &Source) -> Result<(Vec<Ray>, &'static str, Query), String> {
     let kind = args.rays.unwrap_or(RayKind::Primary);
     let query = if kind == RayKind::Shadow {
         Query::Any
@@ -521,25 +627,55 @@ fn make_rays(
         let rays = raygen::read_rays_file(path).map_err(|e| e.to_string())?;
         return Ok((rays, "file", query));
     }
-    let camera = scenes::camera_for(&args.scene, bounds, args.width, args.height);
+    let bounds = &source.bounds;
+    let camera = if source.field.is_some() {
+        // A field lies flat on the ground: seen from above at 45°, it fills the picture.
+        raygen::Camera::framing_from(
+            bounds,
+            rt_core::glam::Vec3::new(0.3, 1.5, 1.0),
+            args.width,
+            args.height,
+        )
+    } else {
+        scenes::camera_for(&args.scene, bounds, args.width, args.height)
+    };
     let shared_kind = match kind {
         RayKind::Primary => raygen::RayKind::Primary,
         RayKind::Incoherent => raygen::RayKind::Incoherent,
         RayKind::Shadow => raygen::RayKind::Shadow,
     };
-    let rays = raygen::rays_of_kind(
-        shared_kind,
-        tris,
-        &camera,
-        bounds,
-        (args.width, args.height),
-        args.seed,
-        // The primary hits come from a SAH BVH; any correct structure gives the same ones.
-        |primary| {
-            let bvh = Bvh::build(tris, &BvhParams::sah());
-            primary.iter().map(|r| bvh.intersect(r)).collect()
-        },
-    );
+    // Shadow rays start at the primary hits, found by a SAH BVH (any correct structure finds
+    // the same ones); they need only the triangles hit, in the world.
+    let rays = match shared_kind {
+        raygen::RayKind::Shadow => {
+            let primary = camera.primary_rays(args.width, args.height);
+            let entry = structures::entries_of::<Bvh<Triangle>, Bvh<rt_core::Shape>>()
+                .into_iter()
+                .find(|e| e.name == "bvh-binary")
+                .expect("rt-bvh has a binary preset");
+            let s = source.build(&entry)?;
+            let mut hit_tris = Vec::new();
+            let hits: Vec<Option<Hit>> = primary
+                .iter()
+                .map(|r| {
+                    s.answer(r, Query::Closest).map(|h| {
+                        hit_tris.push(source.world_triangle(h.prim));
+                        Hit {
+                            prim: hit_tris.len() as u32 - 1,
+                            ..h
+                        }
+                    })
+                })
+                .collect();
+            raygen::shadow_rays(&primary, &hits, &hit_tris, raygen::default_light(bounds))
+        }
+        raygen::RayKind::Primary => camera.primary_rays(args.width, args.height),
+        raygen::RayKind::Incoherent => raygen::incoherent_rays(
+            bounds,
+            args.width as usize * args.height as usize,
+            args.seed,
+        ),
+    };
     Ok((rays, shared_kind.name(), query))
 }
 
@@ -856,9 +992,11 @@ fn describe_disagreements(r: &Report, args: &Args) -> String {
 mod tests {
     use super::*;
     use clap::Parser;
-    use rt_core::{BuildStats, Stats};
+    use rt_bvh::BvhParams;
+    use rt_core::{Accel, BuildStats, Stats};
 
     /// A structure that is wrong on purpose: it loses every hit on an even primitive.
+    #[derive(Debug)]
     struct LosesEvenHits<P: rt_core::Primitive>(Bvh<P>);
 
     impl<P: rt_core::Primitive> Accel for LosesEvenHits<P> {
@@ -933,6 +1071,76 @@ mod tests {
         let mut args = Wrap::parse_from(v).args;
         args.scene = args.scenes[0].clone();
         args
+    }
+
+    #[test]
+    fn a_field_of_instances_agrees_on_every_row_and_every_ray_kind() {
+        // Forty teapots of about 1,000 triangles, every row's structure under the instances.
+        for kind in ["primary", "incoherent", "shadow"] {
+            let a = args(&[
+                "--scene",
+                "teapot:1000",
+                "--instances",
+                "40",
+                "--rays",
+                kind,
+                "--width",
+                "96",
+                "--height",
+                "64",
+                "--repeats",
+                "1",
+                "--check-rays",
+                "6144",
+            ]);
+            let report = measure(&a, 1, structures::all()).expect("the field runs");
+            let one = load_scene("teapot:1000").unwrap().1.len();
+            assert_eq!(
+                report.triangles,
+                40 * one,
+                "every instance's triangles counted"
+            );
+            assert_eq!(
+                report.checked_rays, report.rays,
+                "every ray checked by brute force"
+            );
+            assert!(report.rows.len() > 5);
+            let hits = report.rows[1].hits;
+            if kind == "primary" {
+                assert!(
+                    hits > report.rays / 20,
+                    "the field fills the view ({hits} hits)"
+                );
+            }
+            assert!(hits > 0, "{kind}: some rays hit");
+            for row in &report.rows {
+                assert_eq!(row.mismatches, 0, "{kind}: {} disagrees", row.name);
+                assert_eq!(row.hits, hits, "{kind}: {}", row.name);
+            }
+        }
+    }
+
+    #[test]
+    fn a_field_rejects_bad_counts_and_closest_points_in_one_line() {
+        let bad = measure(
+            &args(&["--scene", "teapot:1000", "--instances", "0"]),
+            1,
+            structures::all(),
+        );
+        assert_eq!(
+            bad.unwrap_err(),
+            "--instances must be from 1 to 1000000, not 0"
+        );
+        let points = args(&[
+            "--scene",
+            "teapot:1000",
+            "--instances",
+            "4",
+            "--query",
+            "closest-point",
+        ]);
+        let err = points::measure(&points, 1, structures::all()).unwrap_err();
+        assert!(err.starts_with("--query closest-point runs on one mesh") && !err.contains('\n'));
     }
 
     #[test]

@@ -8,8 +8,8 @@ use rayon::prelude::*;
 use rt_bvh::Bvh;
 use rt_core::glam::Vec3;
 use rt_core::{
-    Aabb, Accel, BallQuery, BruteForce, BuildStats, Counters, Hit, PointHit, Ray, Region, Shape,
-    Stats, Trace, Triangle,
+    Aabb, Accel, BallQuery, Bottom, BruteForce, BuildStats, Counters, Hit, Instance, PointHit, Ray,
+    Region, Shape, Stats, Trace, Triangle, TwoLevel,
 };
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
@@ -67,6 +67,27 @@ const OCCLUDED: Hit = Hit {
     v: 0.0,
 };
 
+/// Answers `items` in parallel chunks over the current rayon pool, each chunk counting into its
+/// own [`Counters`], and the counters summed: the counted pass of every row.
+fn answer_all<T: Sync, A: Send + Clone + Default>(
+    items: &[T],
+    answer: impl Fn(&T, &mut Counters) -> A + Sync,
+) -> (Vec<A>, Counters) {
+    let mut answers = vec![A::default(); items.len()];
+    let counters = answers
+        .par_chunks_mut(CHUNK)
+        .zip(items.par_chunks(CHUNK))
+        .map(|(out, items)| {
+            let mut c = Counters::default();
+            for (o, item) in out.iter_mut().zip(items) {
+                *o = answer(item, &mut c);
+            }
+            c
+        })
+        .reduce(Counters::default, Counters::merged);
+    (answers, counters)
+}
+
 impl<A: Accel<Prim = Triangle>> Built<A> {
     /// One query with a fresh sink of type `S`, and the sink.
     fn ask<S: Stats + Default>(&self, ray: &Ray, query: Query) -> (Option<Hit>, S) {
@@ -89,22 +110,10 @@ impl<A: Accel<Prim = Triangle>> Traceable for Built<A> {
     }
 
     fn trace_counted(&self, rays: &[Ray], query: Query) -> (Vec<Option<Hit>>, Counters) {
-        let mut answers = vec![None; rays.len()];
-        let counters = answers
-            .par_chunks_mut(CHUNK)
-            .zip(rays.par_chunks(CHUNK))
-            .map(|(out, rays)| {
-                let mut c = Counters::default();
-                for (o, r) in out.iter_mut().zip(rays) {
-                    *o = match query {
-                        Query::Closest => self.0.intersect_with(r, &mut c),
-                        Query::Any => self.0.occluded_with(r, &mut c).then_some(OCCLUDED),
-                    };
-                }
-                c
-            })
-            .reduce(Counters::default, Counters::merged);
-        (answers, counters)
+        answer_all(rays, |r, c| match query {
+            Query::Closest => self.0.intersect_with(r, c),
+            Query::Any => self.0.occluded_with(r, c).then_some(OCCLUDED),
+        })
     }
 
     fn trace_timed(&self, rays: &[Ray], query: Query) -> usize {
@@ -145,19 +154,7 @@ impl<A: Accel<Prim = Triangle>> Traceable for Built<A> {
     }
 
     fn closest_counted(&self, points: &[(Vec3, f32)]) -> (Vec<Option<PointHit>>, Counters) {
-        let mut answers = vec![None; points.len()];
-        let counters = answers
-            .par_chunks_mut(CHUNK)
-            .zip(points.par_chunks(CHUNK))
-            .map(|(out, points)| {
-                let mut c = Counters::default();
-                for (o, &(p, max)) in out.iter_mut().zip(points) {
-                    *o = self.0.closest_point_with(p, max, &mut c);
-                }
-                c
-            })
-            .reduce(Counters::default, Counters::merged);
-        (answers, counters)
+        answer_all(points, |&(p, max), c| self.0.closest_point_with(p, max, c))
     }
 
     fn closest_timed(&self, points: &[(Vec3, f32)]) -> usize {
@@ -180,6 +177,10 @@ impl<A: Accel<Prim = Triangle>> Traceable for Built<A> {
 /// Builds one row's structure over a scene.
 pub type Builder = Arc<dyn Fn(&[Triangle]) -> Box<dyn Traceable> + Send + Sync>;
 
+/// Builds one row's structure over a mesh as the bottom level of instances (`compare
+/// --instances`).
+pub type BottomBuilder = Arc<dyn Fn(&[Triangle]) -> Arc<dyn Bottom<Triangle>> + Send + Sync>;
+
 /// Builds one row's structure over triangles and spheres, for `render`.
 pub type ShapeBuilder = Arc<dyn Fn(&[Shape]) -> Box<dyn Tracer> + Send + Sync>;
 
@@ -190,6 +191,8 @@ pub struct Entry {
     pub name: String,
     /// Builds it over triangles.
     pub build: Builder,
+    /// Builds the same over one mesh, to be shared by instances.
+    pub build_bottom: BottomBuilder,
     /// Builds the same type and preset over [`Shape`]s, when the structure is generic over its
     /// primitive (see [`entries_of`]); `None` for triangle-only structures, which `render`
     /// cannot use.
@@ -225,10 +228,14 @@ where
         .enumerate()
         .map(|(i, (preset, params))| {
             let for_shapes = params.clone();
+            let for_bottom = params.clone();
             Entry {
                 name: row_name::<A>(i, preset),
                 build: Arc::new(move |tris: &[Triangle]| {
                     Box::new(Built(A::build(tris, &params))) as Box<dyn Traceable>
+                }),
+                build_bottom: Arc::new(move |tris: &[Triangle]| {
+                    Arc::new(A::build(tris, &for_bottom)) as Arc<dyn Bottom<Triangle>>
                 }),
                 build_shapes: Some(Arc::new(move |shapes: &[Shape]| {
                     Box::new(S::build(shapes, &for_shapes)) as Box<dyn Tracer>
@@ -247,12 +254,18 @@ where
     A::presets()
         .into_iter()
         .enumerate()
-        .map(|(i, (preset, params))| Entry {
-            name: row_name::<A>(i, preset),
-            build: Arc::new(move |tris: &[Triangle]| {
-                Box::new(Built(A::build(tris, &params))) as Box<dyn Traceable>
-            }),
-            build_shapes: None,
+        .map(|(i, (preset, params))| {
+            let for_bottom = params.clone();
+            Entry {
+                name: row_name::<A>(i, preset),
+                build: Arc::new(move |tris: &[Triangle]| {
+                    Box::new(Built(A::build(tris, &params))) as Box<dyn Traceable>
+                }),
+                build_bottom: Arc::new(move |tris: &[Triangle]| {
+                    Arc::new(A::build(tris, &for_bottom)) as Arc<dyn Bottom<Triangle>>
+                }),
+                build_shapes: None,
+            }
         })
         .collect()
 }
@@ -304,4 +317,170 @@ pub fn find(entries: &[Entry], name: &str) -> Result<Entry, String> {
                     .join(", ")
             )
         })
+}
+
+/// A two-level scene as a row: a field of instances of one mesh. Hits name the flattened
+/// triangle `instance · mesh_len + prim`, so rows over the same field compare directly.
+pub struct Field<T> {
+    scene: T,
+    mesh: Arc<[Triangle]>,
+}
+
+impl<T> std::fmt::Debug for Field<T> {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.debug_struct("Field")
+            .field("mesh_triangles", &self.mesh.len())
+            .finish_non_exhaustive()
+    }
+}
+
+impl<T: TwoLevel<Triangle>> Field<T> {
+    /// The field of `mesh` placed by each of `transforms` (instance `k` gets id `k`), every
+    /// instance sharing the bottom level `bottom` builds once.
+    ///
+    /// # Errors
+    /// One line for a transform that is not finite or is too badly conditioned, or a field with
+    /// more than 2³² - 1 triangles.
+    pub fn new(
+        mesh: Arc<[Triangle]>,
+        transforms: &[rt_core::glam::Affine3A],
+        bottom: &BottomBuilder,
+    ) -> Result<Self, String> {
+        if (mesh.len() as u64) * (transforms.len() as u64) >= u64::from(u32::MAX) {
+            return Err(format!(
+                "a field of {} instances of {} triangles has more than 2^32 - 1 triangles",
+                transforms.len(),
+                mesh.len()
+            ));
+        }
+        let shared = bottom(&mesh);
+        let instances = transforms
+            .iter()
+            .enumerate()
+            .map(|(k, &xf)| {
+                Instance::new(shared.clone(), xf, k as u32)
+                    .map_err(|e| format!("instance {k}: {e}"))
+            })
+            .collect::<Result<Vec<_>, _>>()?;
+        Ok(Self {
+            scene: T::build(instances),
+            mesh,
+        })
+    }
+
+    fn flat(&self, h: rt_core::InstanceHit) -> Hit {
+        Hit {
+            prim: h.instance * self.mesh.len() as u32 + h.prim,
+            ..h.hit()
+        }
+    }
+
+    fn ask<S: Stats>(&self, ray: &Ray, query: Query, stats: &mut S) -> Option<Hit> {
+        match query {
+            Query::Closest => self.scene.intersect_with(ray, stats).map(|h| self.flat(h)),
+            Query::Any => self.scene.occluded_with(ray, stats).then_some(OCCLUDED),
+        }
+    }
+
+    fn point(&self, p: Vec3, max: f32, c: &mut Counters) -> Option<PointHit> {
+        self.scene.closest_point_with(p, max, c).map(|h| PointHit {
+            prim: h.instance * self.mesh.len() as u32 + h.prim,
+            point: h.point,
+            distance: h.distance,
+        })
+    }
+}
+
+impl<T: TwoLevel<Triangle>> Traceable for Field<T> {
+    fn memory_bytes(&self) -> usize {
+        self.scene.memory_bytes()
+    }
+
+    /// The bottom level's shape, with the number of instances among the named figures.
+    fn build_stats(&self) -> BuildStats {
+        let instances = self.scene.instances();
+        let mut stats = instances
+            .first()
+            .map(|i| i.bottom().build_stats())
+            .unwrap_or_default();
+        stats.extra.push(("instances", instances.len() as f64));
+        stats
+    }
+
+    fn trace_counted(&self, rays: &[Ray], query: Query) -> (Vec<Option<Hit>>, Counters) {
+        answer_all(rays, |r, c| self.ask(r, query, c))
+    }
+
+    fn trace_timed(&self, rays: &[Ray], query: Query) -> usize {
+        rays.par_chunks(CHUNK)
+            .map(|rays| match query {
+                Query::Closest => rays
+                    .iter()
+                    .filter(|r| self.scene.intersect(r).is_some())
+                    .count(),
+                Query::Any => rays.iter().filter(|r| self.scene.occluded(r)).count(),
+            })
+            .sum()
+    }
+
+    fn answer(&self, ray: &Ray, query: Query) -> Option<Hit> {
+        self.ask(ray, query, &mut rt_core::NoStats)
+    }
+
+    fn answer_counted(&self, ray: &Ray, query: Query) -> (Option<Hit>, Counters) {
+        let mut c = Counters::default();
+        (self.ask(ray, query, &mut c), c)
+    }
+
+    /// Counts only: the two-level walk reports no steps.
+    fn trace(&self, ray: &Ray, query: Query) -> (Option<Hit>, Trace) {
+        let mut t = Trace::default();
+        (self.ask(ray, query, &mut t), t)
+    }
+
+    /// None: a field is drawn as its instances, which `draw` does not do.
+    fn regions(&self) -> Vec<Region> {
+        Vec::new()
+    }
+
+    fn bounds(&self) -> Aabb {
+        self.scene.bounds()
+    }
+
+    /// Offers every world-space triangle of every instance whose box the ball reaches (the
+    /// flattened scene, as brute force would), numbered as hits are.
+    fn ball_query_dyn(&self, query: &mut dyn BallQuery<Triangle>, counters: &mut Counters) {
+        let n = self.mesh.len() as u32;
+        for (k, inst) in self.scene.instances().iter().enumerate() {
+            counters.node_visit();
+            if inst.world_bounds().distance_squared(query.center()) > query.radius_sq() {
+                continue;
+            }
+            let xf = inst.transform().to_world();
+            for (i, t) in self.mesh.iter().enumerate() {
+                let w = |v: Vec3| xf.transform_point3(v);
+                counters.prim_test();
+                query.test(
+                    &Triangle::new(w(t.v0), w(t.v1), w(t.v2)),
+                    k as u32 * n + i as u32,
+                );
+            }
+        }
+    }
+
+    fn closest_counted(&self, points: &[(Vec3, f32)]) -> (Vec<Option<PointHit>>, Counters) {
+        answer_all(points, |&(p, max), c| self.point(p, max, c))
+    }
+
+    fn closest_timed(&self, points: &[(Vec3, f32)]) -> usize {
+        points
+            .par_chunks(CHUNK)
+            .map(|points| {
+                points
+                    .iter()
+                    .filter(|&&(p, max)| self.scene.closest_point(p, max).is_some())
+                    .count()
+            })
+            .sum()
+    }
 }

@@ -4,7 +4,7 @@
 //! subset, the rows are checked against each other on every point, and brute force settles
 //! every point on which they disagree, as for rays.
 
-use super::{Args, Report, Row, build_fastest, checked_subset, load_scene};
+use super::{Args, Report, Row, Source, build_fastest, checked_subset};
 use crate::structures::{self, Traceable};
 use rt_core::glam::Vec3;
 use rt_core::{Aabb, PointHit, Primitive, raygen};
@@ -29,7 +29,15 @@ pub(super) fn measure(
     threads: usize,
     entries: Vec<structures::Entry>,
 ) -> Result<Report, String> {
-    let (scene, tris) = load_scene(&args.scene)?;
+    if args.instances.is_some() {
+        return Err(
+            "--query closest-point runs on one mesh; leave out --instances (the library's \
+             Instances answer closest points, compare does not field them yet)"
+                .into(),
+        );
+    }
+    let source = Source::load(args)?;
+    let (scene, tris) = (source.label.clone(), source.mesh.clone());
     let valid = tris.iter().filter(|t| t.is_valid()).count();
     if valid == 0 {
         return Err(format!(
@@ -52,18 +60,18 @@ pub(super) fn measure(
         .into_iter()
         .map(|p| (p, max))
         .collect();
-    let subset = checked_subset(queries.len(), args.check_rays, args.seed);
+    let subset = checked_subset(queries.len(), args.check_rays.unwrap_or(20_000), args.seed);
     let subset_queries: Vec<(Vec3, f32)> = subset.iter().map(|&i| queries[i]).collect();
 
     let mut rows = Vec::new();
     let mut answers = Vec::new();
     for entry in &entries {
-        let (s, build_ms) = build_fastest(entry, &tris, args.repeats);
+        let (s, build_ms) = build_fastest(|| source.build(entry), args.repeats)?;
         let (row, found) = query_row(&entry.name, s.as_ref(), build_ms, &queries, args.repeats);
         rows.push(row);
         answers.push(found);
     }
-    let (brute, build_ms) = build_fastest(&structures::brute_force(), &tris, 1);
+    let (brute, build_ms) = build_fastest(|| source.build(&structures::brute_force()), 1)?;
     let (mut brute_row, brute_found) =
         query_row("brute-force", brute.as_ref(), build_ms, &subset_queries, 0);
 

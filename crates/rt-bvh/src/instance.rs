@@ -67,15 +67,6 @@ impl Primitive for InstanceBox {
     }
 }
 
-/// `b` grown by `pad` on every side.
-#[inline(always)]
-fn padded(b: &Aabb, pad: f32) -> Aabb {
-    Aabb {
-        min: b.min - Vec3::splat(pad),
-        max: b.max + Vec3::splat(pad),
-    }
-}
-
 impl<P: Primitive> Instances<P> {
     /// The parameters of the top level: binary nodes, binned SAH with a primitive test priced
     /// at 8 node visits (a visit to an instance transforms the ray and walks a whole bottom
@@ -220,7 +211,7 @@ impl<P: Primitive> Instances<P> {
             u: 0.0,
             v: 0.0,
         };
-        padded(&nodes[0].bounds, pad).intersect(ray, best.t)?;
+        nodes[0].bounds.padded(pad).intersect(ray, best.t)?;
         let mut stack = [(0u32, 0.0f32); MAX_DEPTH];
         let mut sp = 0;
         let mut current = 0usize;
@@ -254,8 +245,8 @@ impl<P: Primitive> Instances<P> {
                 }
             } else {
                 let (a, b) = (current + 1, node.index as usize);
-                let ta = padded(&nodes[a].bounds, pad).entry(ray, best.t);
-                let tb = padded(&nodes[b].bounds, pad).entry(ray, best.t);
+                let ta = nodes[a].bounds.padded(pad).entry(ray, best.t);
+                let tb = nodes[b].bounds.padded(pad).entry(ray, best.t);
                 let (near, t_near, far, t_far) = if ta <= tb {
                     (a, ta, b, tb)
                 } else {

@@ -107,7 +107,7 @@
 //! [`LinearInstances`](rt_core::LinearInstances)'s exactly. Per instance: 192 bytes for the
 //! record and about 97 for the top level. On 1,000 bunnies (`cargo xtask compare --scene
 //! ../shared/meshes/stanford-bunny.obj --instances 1000`), against one bunny: 1.07× the memory,
-//! 1.02× to 1.06× the build time, 0 mismatches for every bottom-level structure.
+//! 1.05× to 1.12× the build time (two runs), 0 mismatches for every bottom-level structure.
 //!
 //! # Measured
 //! Against Embree 3.13 (build quality medium, its default; scene flags default), single-threaded

@@ -75,6 +75,15 @@ impl Aabb {
         }
     }
 
+    /// The box grown by `pad` on every side (what pads against rounding use).
+    #[inline(always)]
+    pub fn padded(self, pad: f32) -> Self {
+        Self {
+            min: self.min - Vec3::splat(pad),
+            max: self.max + Vec3::splat(pad),
+        }
+    }
+
     /// Whether the box holds no point.
     #[inline]
     pub fn is_empty(&self) -> bool {

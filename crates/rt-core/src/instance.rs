@@ -206,14 +206,7 @@ impl InstanceTransform {
         let object = b.min.abs().max(b.max.abs());
         let reach =
             (m * Vec3A::from(object)).max_element() + self.to_world.translation.abs().max_element();
-        let pad = reach / 262_144.0;
-        (
-            Aabb {
-                min: out.min - Vec3::splat(pad),
-                max: out.max + Vec3::splat(pad),
-            },
-            reach,
-        )
+        (out.padded(reach / 262_144.0), reach)
     }
 
     /// How far a ray's box tests at the top level must reach beyond the instances' world boxes,
@@ -228,7 +221,14 @@ impl InstanceTransform {
     /// step many times over.
     #[inline]
     pub fn ray_pad(ray: &Ray, condition: f32, reach: f32) -> f32 {
-        condition * (ray.origin.abs().max_element() + reach) / 65536.0
+        Self::point_pad(ray.origin, condition, reach)
+    }
+
+    /// The same pad for computations about the point `p` (a ray's origin, a closest-point
+    /// query's centre): `2⁻¹⁶ · condition · (|p|∞ + reach)`.
+    #[inline]
+    pub fn point_pad(p: Vec3, condition: f32, reach: f32) -> f32 {
+        condition * (p.abs().max_element() + reach) / 65536.0
     }
 }
 
@@ -508,7 +508,7 @@ impl<P: Primitive> Instance<P> {
             return;
         }
         let center = query.center;
-        let pad = query.condition * (center.abs().max_element() + self.reach) / 65536.0;
+        let pad = InstanceTransform::point_pad(center, query.condition, self.reach);
         let mut ball = ObjectBall {
             query,
             to_world: self.transform.to_world,
@@ -638,7 +638,7 @@ impl InstancePointQuery {
             center: point,
             max_distance,
             condition: condition.max(1.0),
-            slack: condition.max(1.0) * (point.abs().max_element() + reach) / 65536.0,
+            slack: InstanceTransform::point_pad(point, condition.max(1.0), reach),
             radius_sq: -1.0,
             best: None,
         };
@@ -807,11 +807,7 @@ pub trait TwoLevel<P: Primitive>: Sized + Send + Sync {
 /// Whether `ray` enters `b` grown by `pad` within `[ray.t_min, t_max]`: the top-level cull.
 #[inline]
 fn reaches(b: &Aabb, pad: f32, ray: &Ray, t_max: f32) -> bool {
-    let grown = Aabb {
-        min: b.min - Vec3::splat(pad),
-        max: b.max + Vec3::splat(pad),
-    };
-    grown.intersect(ray, t_max).is_some()
+    b.padded(pad).intersect(ray, t_max).is_some()
 }
 
 /// The bytes of each distinct bottom level among `instances`, counted once.

@@ -24,7 +24,7 @@ fn invalid(rays: &[Ray]) -> Vec<Ray> {
     rays.iter()
         .enumerate()
         .map(|(i, r)| {
-            let (o, d) = (r.origin, r.dir);
+            let (o, d) = (r.origin, r.dir());
             match i % 6 {
                 0 => Ray::new(Vec3::new(f32::NAN, o.y, o.z), d),
                 1 => Ray::new(Vec3::new(o.x, Ray::MAX_ORIGIN * 4.0, o.z), d),

@@ -211,7 +211,7 @@ fn bench_trace(c: &mut Criterion, scene: &BenchScene) {
     let otris = to_obvhs(&scene.triangles);
     let orays: Vec<obvhs::ray::Ray> = rays
         .iter()
-        .map(|r| obvhs::ray::Ray::new_inf(Vec3A::from(r.origin), Vec3A::from(r.dir)))
+        .map(|r| obvhs::ray::Ray::new_inf(Vec3A::from(r.origin), Vec3A::from(r.dir())))
         .collect();
     for (label, params) in [
         ("medium", obvhs::BvhBuildParams::medium_build()),
@@ -251,7 +251,7 @@ fn bench_trace(c: &mut Criterion, scene: &BenchScene) {
         .map(|r| {
             bvh::ray::Ray::new(
                 nalgebra::Point3::new(r.origin.x, r.origin.y, r.origin.z),
-                nalgebra::Vector3::new(r.dir.x, r.dir.y, r.dir.z),
+                nalgebra::Vector3::new(r.dir().x, r.dir().y, r.dir().z),
             )
         })
         .collect();

@@ -256,11 +256,11 @@ impl<S: Simd> BoxRay<S> {
         let mut near = [0; 3];
         let mut far = [0; 3];
         for a in 0..3 {
-            let neg = ray.inv_dir[a].is_sign_negative();
+            let neg = ray.inv_dir()[a].is_sign_negative();
             near[a] = a + 3 * neg as usize;
             far[a] = a + 3 * (!neg) as usize;
         }
-        let (o, inv) = (ray.origin, ray.inv_dir);
+        let (o, inv) = (ray.origin, ray.inv_dir());
         // Written out lane by lane: closures passed to `array::map` are not inlined into the
         // AVX2 entry point, and the broadcasts then run as calls (measured: a third of the cost
         // of a ray that misses the root).
@@ -279,8 +279,8 @@ impl<S: Simd> RayData<S> {
     /// The ray's data for the whole traversal, from its slab-test part.
     #[inline(always)]
     pub fn new(simd: S, ray: &Ray, boxes: BoxRay<S>) -> Self {
-        let shear = Shear::new(ray.dir);
-        let (o, d) = (ray.origin, ray.dir);
+        let shear = Shear::new(ray.dir());
+        let (o, d) = (ray.origin, ray.dir());
         let s4 = |x| simd.splat4(x);
         Self {
             boxes,

@@ -242,7 +242,7 @@ impl Aabb {
         let mut near = [0.0; 3];
         let mut far = [0.0; 3];
         for a in 0..3 {
-            let inv = ray.inv_dir[a];
+            let inv = ray.inv_dir()[a];
             let (lo, hi) = if inv.is_sign_negative() {
                 (self.max[a], self.min[a])
             } else {

@@ -179,7 +179,7 @@ impl InstanceTransform {
     pub fn ray_to_object_until(&self, ray: &Ray, t_max: f32) -> Ray {
         Ray::with_interval(
             self.to_object.transform_point3(ray.origin),
-            self.to_object.transform_vector3(ray.dir),
+            self.to_object.transform_vector3(ray.dir()),
             ray.t_min,
             t_max,
         )

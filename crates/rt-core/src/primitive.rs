@@ -130,7 +130,7 @@ pub trait Primitive: Clone + Send + Sync + Debug + 'static {
         let magnitude = point.abs().max_element() + ray.origin.abs().max_element();
         SurfacePoint {
             point,
-            normal: -ray.dir.normalize_or(Vec3::Z),
+            normal: -ray.dir().normalize_or(Vec3::Z),
             error: 2.0 * crate::surface::error_bound(magnitude),
         }
     }

@@ -11,15 +11,25 @@ use glam::Vec3;
 ///
 /// The direction need not be normalized: `t` is measured in units of `dir`.
 ///
+/// The direction and its reciprocal are private, read through [`Ray::dir`] and
+/// [`Ray::inv_dir`], so they cannot disagree: a stale reciprocal would make every box test
+/// answer for another ray, and the structures would miss silently. To change the direction,
+/// make a new ray ([`Ray::with_dir`]). The origin and the interval are plain fields; nothing
+/// is derived from them.
+///
+/// ```compile_fail
+/// use rt_core::{Ray, glam::Vec3};
+/// let mut r = Ray::new(Vec3::ZERO, Vec3::X);
+/// r.dir = Vec3::Y; // private: the reciprocal would go stale
+/// ```
+///
 /// [`Aabb::intersect`]: crate::Aabb::intersect
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ray {
     /// Where the ray starts (at `t = 0`).
     pub origin: Vec3,
-    /// The direction; need not be normalized.
-    pub dir: Vec3,
-    /// Component-wise `1 / dir`, with signed infinities for zero components.
-    pub inv_dir: Vec3,
+    dir: Vec3,
+    inv_dir: Vec3,
     /// Hits with `t < t_min` are ignored.
     pub t_min: f32,
     /// Hits with `t > t_max` are ignored.
@@ -32,7 +42,7 @@ impl Ray {
     /// ```
     /// use rt_core::{Ray, glam::Vec3};
     /// let r = Ray::new(Vec3::ZERO, Vec3::new(0.0, -0.0, 2.0));
-    /// assert_eq!(r.inv_dir.y, f32::NEG_INFINITY);
+    /// assert_eq!(r.inv_dir().y, f32::NEG_INFINITY);
     /// assert_eq!(r.at(1.5), Vec3::new(0.0, 0.0, 3.0));
     /// ```
     #[inline]
@@ -50,6 +60,30 @@ impl Ray {
             t_min,
             t_max,
         }
+    }
+
+    /// The same ray with direction `dir` (and its reciprocal recomputed).
+    ///
+    /// ```
+    /// use rt_core::{Ray, glam::Vec3};
+    /// let r = Ray::new(Vec3::ZERO, Vec3::X).with_dir(Vec3::new(0.0, 4.0, 0.0));
+    /// assert_eq!((r.dir(), r.inv_dir().y), (Vec3::new(0.0, 4.0, 0.0), 0.25));
+    /// ```
+    #[inline]
+    pub fn with_dir(self, dir: Vec3) -> Self {
+        Self::with_interval(self.origin, dir, self.t_min, self.t_max)
+    }
+
+    /// The direction; need not be normalized.
+    #[inline(always)]
+    pub fn dir(&self) -> Vec3 {
+        self.dir
+    }
+
+    /// Component-wise `1 / dir`, with signed infinities for zero components.
+    #[inline(always)]
+    pub fn inv_dir(&self) -> Vec3 {
+        self.inv_dir
     }
 
     /// The point at parameter `t`.

@@ -133,7 +133,7 @@ impl Raster {
     /// assert_eq!(raster.ray(3.5, 7.5), camera.primary_rays(64, 48)[7 * 64 + 3]);
     /// // The top left corner of the image looks up and to the left of its centre.
     /// let (corner, centre) = (raster.ray(0.0, 0.0), raster.ray(32.0, 24.0));
-    /// assert!(corner.dir.y > centre.dir.y);
+    /// assert!(corner.dir().y > centre.dir().y);
     /// ```
     #[inline]
     pub fn ray(&self, x: f32, y: f32) -> Ray {
@@ -378,7 +378,7 @@ mod tests {
             rays[0].origin.to_array().map(f32::to_bits),
             r.origin.to_array().map(f32::to_bits)
         );
-        assert_eq!(rays[0].dir, r.dir);
+        assert_eq!(rays[0].dir(), r.dir());
         assert_eq!((rays[0].t_min, rays[0].t_max), (0.5, f32::INFINITY));
         assert_eq!(rays[1].t_max, f32::INFINITY);
     }
@@ -400,6 +400,6 @@ mod tests {
         assert_eq!(rays.len(), 48);
         // The centre pixels look at (nearly) the box centre.
         let to_center = (b.center() - cam.eye).normalize();
-        assert!(rays[3 * 8 + 4].dir.dot(to_center) > 0.99);
+        assert!(rays[3 * 8 + 4].dir().dot(to_center) > 0.99);
     }
 }

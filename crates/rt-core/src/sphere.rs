@@ -32,9 +32,9 @@ impl Sphere {
     #[inline]
     pub fn roots(&self, ray: &Ray) -> Option<(f32, f32)> {
         let f = ray.origin - self.center;
-        let a = ray.dir.length_squared();
-        let b = f.dot(ray.dir); // half of the textbook b
-        let l = f - (b / a) * ray.dir;
+        let a = ray.dir().length_squared();
+        let b = f.dot(ray.dir()); // half of the textbook b
+        let l = f - (b / a) * ray.dir();
         let r2 = self.radius * self.radius;
         let disc = r2 - l.length_squared();
         if disc < 0.0 || disc.is_nan() {

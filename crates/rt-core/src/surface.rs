@@ -196,7 +196,7 @@ mod tests {
                 let s = sphere.surface(&ray, h.t, h.u, h.v);
                 // Leaving outwards: no hit at all (a sphere is convex).
                 let out = s.spawn_ray((s.normal + 0.5 * rng.unit_vector()).normalize());
-                if out.dir.dot(s.normal) > 0.0 {
+                if out.dir().dot(s.normal) > 0.0 {
                     assert!(
                         sphere.intersect(&out, f32::INFINITY).is_none(),
                         "{}",

@@ -63,7 +63,7 @@ impl Triangle {
     /// sign decision is exact. Points on an edge count as inside.
     #[inline]
     pub fn intersect_watertight(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
-        self.intersect_sheared(&Shear::new(ray.dir), ray, t_max)
+        self.intersect_sheared(&Shear::new(ray.dir()), ray, t_max)
     }
 
     /// [`Triangle::intersect_watertight`] with the ray's [`Shear`] computed beforehand (it
@@ -140,7 +140,7 @@ pub fn moller_trumbore_edges(
     ray: &Ray,
     t_max: f32,
 ) -> Option<PrimHit> {
-    let p = ray.dir.cross(e2);
+    let p = ray.dir().cross(e2);
     let det = e1.dot(p);
     if det == 0.0 {
         return None;
@@ -153,7 +153,7 @@ pub fn moller_trumbore_edges(
         return None;
     }
     let q = s.cross(e1);
-    let v = ray.dir.dot(q) * inv;
+    let v = ray.dir().dot(q) * inv;
     if !(v >= 0.0 && u + v <= 1.0) {
         return None;
     }
@@ -422,9 +422,9 @@ mod tests {
             // triangles lie on the same side (a fold), the ray may graze the edge from outside.
             let n_a = a.normal();
             let n_b = b.normal();
-            let side_a = (r1 - p).dot(ray.dir.cross(q - p));
-            let side_b = (r2 - p).dot(ray.dir.cross(q - p));
-            prop_assume!(side_a * side_b < 0.0 && n_a.dot(ray.dir) * n_b.dot(ray.dir) > 0.0);
+            let side_a = (r1 - p).dot(ray.dir().cross(q - p));
+            let side_b = (r2 - p).dot(ray.dir().cross(q - p));
+            prop_assume!(side_a * side_b < 0.0 && n_a.dot(ray.dir()) * n_b.dot(ray.dir()) > 0.0);
             let hit = a.intersect_watertight(&ray, f32::INFINITY).is_some()
                 || b.intersect_watertight(&ray, f32::INFINITY).is_some();
             prop_assert!(hit, "slipped: {}", ray.to_rust());

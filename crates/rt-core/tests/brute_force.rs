@@ -14,7 +14,7 @@ fn spheres() {
 /// Möller–Trumbore in f64: (t, min barycentric margin, |det| relative to edge lengths).
 fn oracle(t: &Triangle, r: &Ray) -> Option<(f64, f64, f64)> {
     let [v0, v1, v2] = t.to_f64();
-    let (o, d) = (r.origin.as_dvec3(), r.dir.as_dvec3());
+    let (o, d) = (r.origin.as_dvec3(), r.dir().as_dvec3());
     let (e1, e2) = (v1 - v0, v2 - v0);
     let p = d.cross(e2);
     let det = e1.dot(p);
@@ -83,7 +83,7 @@ fn agrees_with_a_double_precision_oracle_where_the_answer_is_clear() {
                 // Whatever brute force reports must be a real hit on that triangle by the oracle,
                 // up to rounding at the edges.
                 let t = s.triangles[h.prim as usize];
-                let p = r.origin.as_dvec3() + r.dir.as_dvec3() * h.t as f64;
+                let p = r.origin.as_dvec3() + r.dir().as_dvec3() * h.t as f64;
                 let [a, b, c] = t.to_f64();
                 let n = (b - a).cross(c - a);
                 let edge = (b - a).length().max((c - a).length()).max((c - b).length());

@@ -12,7 +12,7 @@ static RELEASE: AtomicBool = AtomicBool::new(false);
 
 /// The rays a broken structure below gets wrong: those heading mostly down.
 fn cursed(ray: &Ray) -> bool {
-    ray.is_valid() && ray.dir.y < -0.5 * ray.dir.length()
+    ray.is_valid() && ray.dir().y < -0.5 * ray.dir().length()
 }
 
 /// Brute force, except that `intersect` never returns on a cursed ray (like a DDA stepping by

@@ -27,8 +27,8 @@ impl RayAxes {
     pub fn new(ray: &Ray) -> Self {
         Self {
             o: ray.origin.to_array(),
-            d: ray.dir.to_array(),
-            inv: ray.inv_dir.to_array(),
+            d: ray.dir().to_array(),
+            inv: ray.inv_dir().to_array(),
         }
     }
 

@@ -66,9 +66,9 @@ struct RayAxes {
 impl RayAxes {
     #[inline(always)]
     fn new(ray: &Ray) -> Self {
-        let inv = Vec3A::from(ray.inv_dir);
+        let inv = Vec3A::from(ray.inv_dir());
         let flat = !inv.is_finite_mask();
-        let neg = Vec3A::from(ray.dir).cmplt(Vec3A::ZERO) & !flat;
+        let neg = Vec3A::from(ray.dir()).cmplt(Vec3A::ZERO) & !flat;
         Self {
             o: Vec3A::from(ray.origin),
             inv,

@@ -27,7 +27,7 @@ impl Context<'_> {
     pub fn radiance(&self, ray: &Ray, depth: u32) -> Vec3 {
         match self.tracer.closest_hit(ray) {
             Some(hit) => self.shade(ray, hit, depth),
-            None => self.sky(ray.dir),
+            None => self.sky(ray.dir()),
         }
     }
 
@@ -69,7 +69,7 @@ impl Context<'_> {
     fn shade(&self, ray: &Ray, hit: Hit, depth: u32) -> Vec3 {
         let material = self.scene.material(hit.prim as usize);
         let Surface { at, mut normal } = self.surface(ray, hit);
-        let d = ray.dir.normalize();
+        let d = ray.dir().normalize();
         // Face the viewer: flip both normals when the ray arrives from the back (or from inside
         // a glass sphere); `entering` says which side of a refracting surface we are on.
         let entering = d.dot(at.normal) < 0.0;

@@ -37,7 +37,7 @@ fn check(scene: &RenderScene) -> Tally {
             };
             let shape = &shapes[hit.prim as usize];
             let s = shape.surface(&ray, hit.t, hit.u, hit.v);
-            let front = if s.normal.dot(ray.dir) < 0.0 {
+            let front = if s.normal.dot(ray.dir()) < 0.0 {
                 s.normal
             } else {
                 -s.normal
@@ -50,7 +50,7 @@ fn check(scene: &RenderScene) -> Tally {
                 }
             }
             if let Shape::Triangle(_) = shape {
-                let d = ray.dir;
+                let d = ray.dir();
                 let r = d - 2.0 * d.dot(front) * front;
                 outgoing.push((s.spawn_ray(r), Ray::new(s.point, r)));
             }

@@ -106,7 +106,7 @@ fn the_picture_shows_the_scene() {
                 continue;
             }
             let s = shapes[mirror].surface(&ray, hit.t, hit.u, hit.v);
-            let d = ray.dir;
+            let d = ray.dir();
             let reflected = s.spawn_ray(d - 2.0 * d.dot(s.normal) * s.normal);
             let Some(seen) = bvh.intersect(&reflected) else {
                 continue;

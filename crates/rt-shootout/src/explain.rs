@@ -110,7 +110,7 @@ pub fn explain(args: &ExplainArgs, entries: &[Entry]) -> Result<String, String> 
     out += &format!(
         "ray: {} {} {} {} (as a rays-file line)\n\n",
         v(ray.origin),
-        v(ray.dir),
+        v(ray.dir()),
         ray.t_min,
         ray.t_max
     );

@@ -136,7 +136,7 @@ pub fn encode(tris: &[Triangle], rays: &[Ray]) -> Vec<u8> {
     }
     for r in rays.iter().take(MAX_RAYS) {
         put(r.origin);
-        put(r.dir);
+        put(r.dir());
     }
     out
 }
@@ -152,7 +152,7 @@ pub fn encode_lattice(tris: &[Triangle], rays: &[Ray]) -> Option<Vec<u8>> {
     let points = tris
         .iter()
         .flat_map(|t| [t.v0, t.v1, t.v2])
-        .chain(rays.iter().take(MAX_RAYS).flat_map(|r| [r.origin, r.dir]));
+        .chain(rays.iter().take(MAX_RAYS).flat_map(|r| [r.origin, r.dir()]));
     for c in points.flat_map(|p| p.to_array()) {
         let q = c * 4.0;
         if q != q.round() || !(-128.0..=127.0).contains(&q) {

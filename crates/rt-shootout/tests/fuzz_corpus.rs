@@ -187,7 +187,10 @@ fn decode_gives_back_what_encode_wrote() {
     }
     assert_eq!(case.rays.len(), 2);
     for (a, b) in case.rays.iter().zip(&rays) {
-        assert_eq!((bits(a.origin), bits(a.dir)), (bits(b.origin), bits(b.dir)));
+        assert_eq!(
+            (bits(a.origin), bits(a.dir())),
+            (bits(b.origin), bits(b.dir()))
+        );
     }
     // A planted bug is caught: a structure that lost a triangle would disagree; here, the
     // decoder's lattice mode reads signed quarters.

@@ -9,7 +9,7 @@
 //! box's two planes from `(lo - o) / d` to `(hi - o) / d`, where `lo` is the plane it meets
 //! first (the smaller one when `d` is positive, the larger when it is negative); the box is
 //! where all three slabs and the ray's own interval overlap. Mind the corner cases: a zero
-//! direction component gives infinite reciprocals (`ray.inv_dir`); `-0.0` counts as negative;
+//! direction component gives infinite reciprocals (`ray.inv_dir()`); `-0.0` counts as negative;
 //! `0 × ∞` is NaN when the origin lies in a face plane, and such a ray is inside that slab
 //! (boxes are closed).
 

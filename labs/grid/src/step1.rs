@@ -4,7 +4,7 @@
 //! `[t0, t1]` of the ray inside it. Per axis, the ray is inside the slab `min ≤ o + t·d ≤ max`
 //! between `(min - o) / d` and `(max - o) / d`; the box is the intersection of the three slabs
 //! and of the ray's own interval. Mind the corner cases: a zero direction component gives
-//! infinite reciprocals (`ray.inv_dir`), `-0.0` is negative, and `0 × ∞` is NaN when the
+//! infinite reciprocals (`ray.inv_dir()`), `-0.0` is negative, and `0 × ∞` is NaN when the
 //! origin lies in a face plane: such a ray is inside that slab (boxes are closed).
 
 use rt_core::{Aabb, Primitive, Ray, Triangle};

@@ -230,7 +230,7 @@ fn step_4_a_hit_beyond_the_cell_does_not_end_the_walk() {
     let reference = BruteForce::build(&all, &());
     for ray in rays_into_cube(4, 500)
         .iter()
-        .map(|r| Ray::new(r.origin * 10.0, r.dir))
+        .map(|r| Ray::new(r.origin * 10.0, r.dir()))
     {
         assert!(
             Hit::agree(reference.intersect(&ray), grid.intersect(&ray)),

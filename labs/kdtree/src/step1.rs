@@ -3,7 +3,7 @@
 //! An interior node splits its cell at `node.split()` along axis `node.axis()` (0 = x, 1 = y,
 //! 2 = z); its children are `node.index()` (below the plane) and `node.index() + 1` (above).
 //! The node has no box: all a ray needs is the parameter `t` where it crosses the plane,
-//! `(split - o) / d` along that axis (use `ray.inv_dir`, the reciprocals, as every traversal
+//! `(split - o) / d` along that axis (use `ray.inv_dir()`, the reciprocals, as every traversal
 //! does), and which child it is in before that crossing: the near child.
 //!
 //! The near child is the one the ray is in before it crosses the plane: the origin's side. An

@@ -329,7 +329,7 @@ fn step_4_a_hit_beyond_the_leaf_does_not_end_the_walk() {
     let reference = BruteForce::build(&tris, &());
     for ray in rays_into_cube(4, 500)
         .iter()
-        .map(|r| Ray::new(r.origin * 10.0, r.dir))
+        .map(|r| Ray::new(r.origin * 10.0, r.dir()))
     {
         assert!(
             Hit::agree(reference.intersect(&ray), lab.intersect(&ray)),

@@ -427,11 +427,11 @@ fn faithful(
             .position(|&k| k == (instance, prim))
             .expect("every hit names a flattened triangle")
     };
-    let len = ray.dir.length();
+    let len = ray.dir().length();
     // The world-space slack of a hit on triangle `i` at `t`, as a distance along its plane.
     let slack = |i: usize| {
         let n = world[i].normal().normalize_or_zero();
-        let cos = (ray.dir.dot(n) / len).abs().max(1e-6);
+        let cos = (ray.dir().dot(n) / len).abs().max(1e-6);
         e / cos
     };
     match (got, flat) {

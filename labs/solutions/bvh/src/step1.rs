@@ -9,7 +9,7 @@
 //! box's two planes from `(lo - o) / d` to `(hi - o) / d`, where `lo` is the plane it meets
 //! first (the smaller one when `d` is positive, the larger when it is negative); the box is
 //! where all three slabs and the ray's own interval overlap. Mind the corner cases: a zero
-//! direction component gives infinite reciprocals (`ray.inv_dir`); `-0.0` counts as negative;
+//! direction component gives infinite reciprocals (`ray.inv_dir()`); `-0.0` counts as negative;
 //! `0 × ∞` is NaN when the origin lies in a face plane, and such a ray is inside that slab
 //! (boxes are closed).
 
@@ -35,7 +35,7 @@ pub fn entry(b: &Aabb, ray: &Ray, t_max: f32) -> f32 {
     let mut near = ray.t_min;
     let mut far = t_max;
     for a in 0..3 {
-        let inv = ray.inv_dir[a];
+        let inv = ray.inv_dir()[a];
         let (lo, hi) = if inv.is_sign_negative() {
             (b.max[a], b.min[a])
         } else {

@@ -29,7 +29,7 @@ pub fn walk(
     // BEGIN SOLUTION step 3: the walk
     let mut visit = visit;
     let p = ray.at(t0);
-    let cross = |a: usize, k: u32| (grid.plane(a, k) - ray.origin[a]) * ray.inv_dir[a];
+    let cross = |a: usize, k: u32| (grid.plane(a, k) - ray.origin[a]) * ray.inv_dir()[a];
     let mut cell: [u32; 3] = std::array::from_fn(|a| {
         let f = ((p[a] - grid.bounds.min[a]) * grid.inv_cell[a]).floor();
         let mut k = (f.max(0.0) as u32).min(grid.res[a] - 1);
@@ -37,14 +37,14 @@ pub fn walk(
         // 10¹² the parameter's rounding step is larger than a small grid, and every plane's
         // crossing rounds to `t0`): move to the first cell along the ray that the ray leaves
         // at or after `t0`.
-        if ray.dir[a] > 0.0 {
+        if ray.dir()[a] > 0.0 {
             while k > 0 && cross(a, k) >= t0 {
                 k -= 1;
             }
             while k + 1 < grid.res[a] && cross(a, k + 1) < t0 {
                 k += 1;
             }
-        } else if ray.dir[a] < 0.0 {
+        } else if ray.dir()[a] < 0.0 {
             while k + 1 < grid.res[a] && cross(a, k + 1) >= t0 {
                 k += 1;
             }
@@ -58,7 +58,7 @@ pub fn walk(
     loop {
         // Where the ray crosses the next boundary along each axis.
         let next: [f32; 3] = std::array::from_fn(|a| {
-            let d = ray.dir[a];
+            let d = ray.dir()[a];
             if d > 0.0 {
                 cross(a, cell[a] + 1)
             } else if d < 0.0 {
@@ -75,7 +75,7 @@ pub fn walk(
         if visit(cell, t_enter, t_exit.min(t1)) || t_exit > t1 {
             return;
         }
-        if ray.dir[a] > 0.0 {
+        if ray.dir()[a] > 0.0 {
             if cell[a] + 1 >= grid.res[a] {
                 return;
             }

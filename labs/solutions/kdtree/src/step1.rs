@@ -3,7 +3,7 @@
 //! An interior node splits its cell at `node.split()` along axis `node.axis()` (0 = x, 1 = y,
 //! 2 = z); its children are `node.index()` (below the plane) and `node.index() + 1` (above).
 //! The node has no box: all a ray needs is the parameter `t` where it crosses the plane,
-//! `(split - o) / d` along that axis (use `ray.inv_dir`, the reciprocals, as every traversal
+//! `(split - o) / d` along that axis (use `ray.inv_dir()`, the reciprocals, as every traversal
 //! does), and which child it is in before that crossing: the near child.
 //!
 //! The near child is the one the ray is in before it crosses the plane: the origin's side. An
@@ -22,7 +22,7 @@ use rt_core::Ray;
 pub fn plane_t(node: &Node, ray: &Ray) -> f32 {
     // BEGIN SOLUTION step 1: where the ray crosses the plane
     let a = node.axis();
-    (node.split() - ray.origin[a]) * ray.inv_dir[a]
+    (node.split() - ray.origin[a]) * ray.inv_dir()[a]
     // END SOLUTION
 }
 
@@ -31,7 +31,7 @@ pub fn plane_t(node: &Node, ray: &Ray) -> f32 {
 pub fn near_far(node: &Node, ray: &Ray) -> (usize, usize) {
     // BEGIN SOLUTION step 1: the near and the far child
     let a = node.axis();
-    let (o, d, split) = (ray.origin[a], ray.dir[a], node.split());
+    let (o, d, split) = (ray.origin[a], ray.dir()[a], node.split());
     let below = o < split || (o == split && d > 0.0);
     let first = node.index();
     if below {

@@ -16,7 +16,7 @@ use crate::node::{ChildRef, Node, PACK, TriPack, WIDTH, WideNode};
 use crate::{BvhParams, Layout, MAX_DEPTH, SplitMethod};
 use rayon::prelude::*;
 use rt_core::glam::{Vec3, Vec3A};
-use rt_core::{Aabb, Primitive, Triangle, TriangleTest};
+use rt_core::{Aabb, Geometry, Primitive, Triangle, TriangleTest};
 
 /// A box in SIMD registers for the build's inner loops.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -142,8 +142,8 @@ pub(crate) struct Built<P> {
 }
 
 /// Build settings derived from the parameters and the input.
-struct Ctx<'a, P> {
-    prims: &'a [P],
+struct Ctx<'a, G: ?Sized> {
+    prims: &'a G,
     split: SplitMethod,
     bins: usize,
     traversal_cost: f32,
@@ -173,7 +173,7 @@ const PAR_SUBTREE_MIN: usize = 1 << 11;
 /// O(log N) levels for balanced splits, so the build is O(N log N); the depth is bounded by
 /// [`MAX_DEPTH`] (count splits take over when the budget runs short), so it is O(N · MAX_DEPTH)
 /// at worst. Scratch memory: the 32-byte references and, per thread, one bin array.
-pub(crate) fn build<P: Primitive>(prims: &[P], params: &BvhParams) -> Built<P> {
+pub(crate) fn build<G: Geometry + ?Sized>(prims: &G, params: &BvhParams) -> Built<G::Prim> {
     let wide = params.layout == Layout::Wide;
     // PERF: below PAR_BUILD_MIN primitives the parallel build's overhead outweighs its gain
     // (teapot, 6,320 triangles: 1.1 ms sequential, 1.2 ms on 2 threads).
@@ -292,7 +292,7 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &BvhParams) -> Built<P> {
         if !wide {
             compact_binary(&mut out.binary, &mut refs);
         }
-        out.prims = refs.iter().map(|r| prims[r.id as usize].clone()).collect();
+        out.prims = refs.iter().map(|r| prims.prim(r.id as usize)).collect();
         out.ids = refs.iter().map(|r| r.id).collect();
     }
     out.stored = if test.is_some() {
@@ -369,9 +369,10 @@ const OTHER: u32 = 3;
 ///
 /// PERF: gathering each chunk's valid references into its own vector and concatenating them
 /// took 0.68 ms on 2 threads for the sphereflake, no faster than the sequential 0.61 ms.
-fn make_refs<P: Primitive>(prims: &[P], parallel: bool) -> Refs {
-    let prims = &prims[..prims.len().min(u32::MAX as usize)];
-    let make = |(i, p): (usize, &P)| {
+fn make_refs<G: Geometry + ?Sized>(prims: &G, parallel: bool) -> Refs {
+    let n = prims.len().min(u32::MAX as usize);
+    let make = |i: usize| {
+        let p = prims.prim(i);
         let kind = if !p.is_valid() {
             INVALID
         } else {
@@ -427,7 +428,7 @@ fn make_refs<P: Primitive>(prims: &[P], parallel: bool) -> Refs {
         (r, ia + ib)
     };
     let (refs, (mut all, invalid)) = if parallel {
-        let refs: Vec<PrimRef> = prims.par_iter().enumerate().map(make).collect();
+        let refs: Vec<PrimRef> = (0..n).into_par_iter().map(make).collect();
         let s = refs
             .par_chunks(REFS_CHUNK)
             .map(summary)
@@ -435,7 +436,7 @@ fn make_refs<P: Primitive>(prims: &[P], parallel: bool) -> Refs {
             .unwrap_or_else(|| summary(&[]));
         (refs, s)
     } else {
-        let refs: Vec<PrimRef> = prims.iter().enumerate().map(make).collect();
+        let refs: Vec<PrimRef> = (0..n).map(make).collect();
         let s = summary(&refs);
         (refs, s)
     };
@@ -592,8 +593,8 @@ fn ceil_log2(n: usize) -> usize {
 /// in a leaf. A set too big for a leaf whose centres coincide is split by count, and so is any
 /// set once the remaining depth budget only just fits a balanced split: that keeps every tree
 /// within [`MAX_DEPTH`], the traversal stacks' bound.
-fn plan<P>(
-    ctx: &Ctx<'_, P>,
+fn plan<G: ?Sized>(
+    ctx: &Ctx<'_, G>,
     refs: &[PrimRef],
     base: usize,
     set: &Set,
@@ -705,8 +706,8 @@ fn plan<P>(
 /// Plans `set`, whose references are exactly `refs`: first, if its box centres all coincide
 /// and it is too big for a leaf, it drops bit-identical copies of its triangles ([`dedup`]),
 /// which shortens it; then [`plan`].
-fn plan_set<P: Primitive>(
-    ctx: &Ctx<'_, P>,
+fn plan_set<G: Geometry + ?Sized>(
+    ctx: &Ctx<'_, G>,
     refs: &mut [PrimRef],
     set: &mut Set,
     scratch: &mut Scratch,
@@ -734,9 +735,11 @@ fn plan_set<P: Primitive>(
 /// visits, 10 ms. Copies pile up in sets whose box centres coincide, which is the only place
 /// this looks. Triangles with the same vertices in another order are not copies: their answers
 /// may differ in the last bit.
-fn dedup<P: Primitive>(ctx: &Ctx<'_, P>, refs: &mut [PrimRef]) -> usize {
+fn dedup<G: Geometry + ?Sized>(ctx: &Ctx<'_, G>, refs: &mut [PrimRef]) -> usize {
     let key = |r: &PrimRef| {
-        let (t, _) = ctx.prims[r.id as usize]
+        let (t, _) = ctx
+            .prims
+            .prim(r.id as usize)
             .as_triangle()
             .expect("dedup runs on triangles only");
         let bits = [t.v0, t.v1, t.v2].map(|v| v.to_array().map(f32::to_bits));
@@ -755,8 +758,8 @@ fn dedup<P: Primitive>(ctx: &Ctx<'_, P>, refs: &mut [PrimRef]) -> usize {
 
 /// Splits `set` by its plan (not [`Plan::Leaf`]), reordering its references, and plans both
 /// halves.
-fn split<P: Primitive>(
-    ctx: &Ctx<'_, P>,
+fn split<G: Geometry + ?Sized>(
+    ctx: &Ctx<'_, G>,
     refs: &mut [PrimRef],
     base: usize,
     set: &Set,
@@ -928,8 +931,8 @@ struct Parted {
 
 /// Emits the binary subtree of `set` depth first (first child right after its parent). `refs`
 /// holds the references from absolute index `base` on.
-fn emit_binary<P: Primitive>(
-    ctx: &Ctx<'_, P>,
+fn emit_binary<G: Geometry + ?Sized>(
+    ctx: &Ctx<'_, G>,
     refs: &mut [PrimRef],
     base: usize,
     set: Set,
@@ -1026,8 +1029,8 @@ const PRESPLIT_LEVELS: usize = 3;
 /// time, the root of the sphereflake kept one thread busy for 1.9 ms before its children could
 /// be built in parallel; the 2-thread build was 1.46x faster than one thread, the binary tree's
 /// (whose two halves run in parallel from the root on) 1.73x.
-fn presplit<P: Primitive>(
-    ctx: &Ctx<'_, P>,
+fn presplit<G: Geometry + ?Sized>(
+    ctx: &Ctx<'_, G>,
     refs: &mut [PrimRef],
     base: usize,
     set: Set,
@@ -1061,8 +1064,8 @@ fn presplit<P: Primitive>(
 /// Emits the wide subtree of `planned` and returns the reference to it: a leaf, or a node whose
 /// children are the sets left after splitting the largest child until there are eight. `refs`
 /// holds the references from absolute index `base` on.
-fn emit_wide<P: Primitive>(
-    ctx: &Ctx<'_, P>,
+fn emit_wide<G: Geometry + ?Sized>(
+    ctx: &Ctx<'_, G>,
     refs: &mut [PrimRef],
     base: usize,
     planned: Planned,
@@ -1167,8 +1170,8 @@ fn emit_wide<P: Primitive>(
 ///
 /// PERF: appending the root's eight subtrees one after another (4.2 MB for the sphereflake)
 /// took 0.43 ms on one thread while the other waited.
-fn append_all<P>(
-    ctx: &Ctx<'_, P>,
+fn append_all<G: ?Sized>(
+    ctx: &Ctx<'_, G>,
     out: &mut WideOut,
     parts: Vec<(ChildRef, WideOut)>,
 ) -> Vec<ChildRef> {
@@ -1223,8 +1226,8 @@ fn append_all<P>(
 }
 
 /// A leaf: its triangles packed four to a pack, or its range of references.
-fn emit_leaf<P: Primitive>(
-    ctx: &Ctx<'_, P>,
+fn emit_leaf<G: Geometry + ?Sized>(
+    ctx: &Ctx<'_, G>,
     range: &[PrimRef],
     set: &Set,
     out: &mut WideOut,
@@ -1235,7 +1238,9 @@ fn emit_leaf<P: Primitive>(
             for chunk in range.chunks(PACK) {
                 let mut tris = [(Triangle::new(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO), 0u32); PACK];
                 for (slot, r) in tris.iter_mut().zip(chunk) {
-                    let (t, _) = ctx.prims[r.id as usize]
+                    let (t, _) = ctx
+                        .prims
+                        .prim(r.id as usize)
                         .as_triangle()
                         .expect("every primitive of a packed tree is a triangle");
                     *slot = (t, r.id);

@@ -1,6 +1,8 @@
 //! The trait every acceleration structure implements.
 
-use crate::{Aabb, BallQuery, ClosestPointQuery, NoStats, PointHit, Primitive, Ray, Stats};
+use crate::{
+    Aabb, BallQuery, ClosestPointQuery, Geometry, NoStats, PointHit, Primitive, Ray, Stats,
+};
 use glam::Vec3;
 use std::fmt::Debug;
 
@@ -138,6 +140,27 @@ pub trait Accel: Sized + Send + Sync {
 
     /// Builds the structure over `prims`; indices in hits refer to this slice.
     fn build(prims: &[Self::Prim], params: &Self::Params) -> Self;
+
+    /// Builds the structure over the primitives of `geometry`: a slice, a
+    /// [`Mesh`](crate::Mesh), or an [`IndexedTriangles`](crate::IndexedTriangles) view of
+    /// buffers the caller has; indices in hits refer to its numbering.
+    ///
+    /// The default collects the primitives into a vector and calls [`build`](Accel::build).
+    /// Every structure of this workspace overrides it to read them straight into the layout it
+    /// keeps, so building from a mesh makes no triangle list in between.
+    ///
+    /// ```
+    /// use rt_core::{Accel, BruteForce, Mesh, Ray, glam::Vec3};
+    /// let mesh = Mesh::new(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]]).unwrap();
+    /// let accel = BruteForce::build_from(&mesh, &());
+    /// assert_eq!(accel.intersect(&Ray::new(Vec3::new(0.2, 0.2, 1.0), -Vec3::Z)).unwrap().t, 1.0);
+    /// ```
+    fn build_from<G: Geometry<Prim = Self::Prim> + ?Sized>(
+        geometry: &G,
+        params: &Self::Params,
+    ) -> Self {
+        Self::build(&geometry.to_vec(), params)
+    }
 
     /// The closest hit, reporting traversal events to `stats`.
     fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit>;

@@ -1,6 +1,6 @@
 //! The O(N) reference every structure is checked against.
 
-use crate::{Aabb, Accel, BallQuery, BuildStats, Hit, Primitive, Ray, Stats};
+use crate::{Aabb, Accel, BallQuery, BuildStats, Geometry, Hit, Primitive, Ray, Stats};
 
 /// Tests every primitive for every ray and keeps the closest: the definition of the right answer.
 ///
@@ -22,11 +22,13 @@ impl<P: Primitive> Accel for BruteForce<P> {
     }
 
     fn build(prims: &[P], _: &()) -> Self {
-        let (ids, prims): (Vec<u32>, Vec<P>) = prims
-            .iter()
-            .enumerate()
+        Self::build_from(prims, &())
+    }
+
+    fn build_from<G: Geometry<Prim = P> + ?Sized>(geometry: &G, _: &()) -> Self {
+        let (ids, prims): (Vec<u32>, Vec<P>) = (0..geometry.len().min(u32::MAX as usize))
+            .map(|i| (i as u32, geometry.prim(i)))
             .filter(|(_, p)| p.is_valid())
-            .map(|(i, p)| (i as u32, p.clone()))
             .unzip();
         let bounds = prims
             .iter()

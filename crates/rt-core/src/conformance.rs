@@ -702,6 +702,112 @@ pub fn check_scene_closest<A: Accel<Prim = Triangle> + 'static>(params: &A::Para
     }
 }
 
+/// The triangles as an indexed mesh whose bit-identical vertices are shared: what
+/// [`check_geometry_sources`] builds from.
+pub fn shared_vertex_mesh(tris: &[Triangle]) -> crate::Mesh {
+    let mut index = std::collections::HashMap::new();
+    let mut positions = Vec::new();
+    let indices = tris
+        .iter()
+        .map(|t| {
+            [t.v0, t.v1, t.v2].map(|v| {
+                *index
+                    .entry(v.to_array().map(f32::to_bits))
+                    .or_insert_with(|| {
+                        positions.push(v);
+                        positions.len() as u32 - 1
+                    })
+            })
+        })
+        .collect();
+    crate::Mesh::new(positions, indices).expect("every index names a vertex just pushed")
+}
+
+/// Checks that structure `A` built with [`Accel::build_from`] from a [`Mesh`](crate::Mesh) and
+/// from an [`IndexedTriangles`](crate::IndexedTriangles) view answers every ray and point of
+/// every adversarial scene exactly as when built from the triangle slice (same build stats, same
+/// hits bit for bit), and so like brute force. The first 200 rays and points of each scene are
+/// enough: the sources must give the same structure, which the full scene checks test already.
+///
+/// # Panics
+/// At the first difference, naming the scene, the source and the query.
+pub fn check_geometry_sources<A: Accel<Prim = Triangle> + 'static>(params: &A::Params) {
+    let same_hit = |a: Option<Hit>, b: Option<Hit>| match (a, b) {
+        (None, None) => true,
+        (Some(a), Some(b)) => {
+            a.prim == b.prim
+                && [a.t, a.u, a.v].map(f32::to_bits) == [b.t, b.u, b.v].map(f32::to_bits)
+        }
+        _ => false,
+    };
+    for name in SCENES {
+        let s = scene(name);
+        let mesh = shared_vertex_mesh(&s.triangles);
+        let bits = |t: &Triangle| [t.v0, t.v1, t.v2].map(|v| v.to_array().map(f32::to_bits));
+        assert!(
+            mesh.triangles()
+                .iter()
+                .map(bits)
+                .eq(s.triangles.iter().map(bits)),
+            "scene `{name}`: the shared-vertex mesh does not rebuild the triangles"
+        );
+        let from_slice = A::build(&s.triangles, params);
+        let rays = &s.rays[..s.rays.len().min(200)];
+        let points = scene_points(&s.triangles, rays);
+        let points = &points[..points.len().min(200)];
+        for (source, accel) in [
+            ("Mesh", A::build_from(&mesh, params)),
+            ("IndexedTriangles", A::build_from(&mesh.view(), params)),
+        ] {
+            let fail = |what: String| -> ! {
+                panic!(
+                    "{} with {params:?} built from a {source} on scene `{name}`: {what}",
+                    A::NAME
+                )
+            };
+            if accel.build_stats() != from_slice.build_stats() {
+                fail(format!(
+                    "build stats {:?}, from the slice {:?}",
+                    accel.build_stats(),
+                    from_slice.build_stats()
+                ));
+            }
+            for ray in rays {
+                let (a, b) = (accel.intersect(ray), from_slice.intersect(ray));
+                if !same_hit(a, b) {
+                    fail(format!(
+                        "{a:?}, from the slice {b:?}, for {}",
+                        ray.to_rust()
+                    ));
+                }
+                if accel.occluded(ray) != from_slice.occluded(ray) {
+                    fail(format!("another any-hit answer for {}", ray.to_rust()));
+                }
+            }
+            for &(p, max) in points {
+                let (a, b) = (
+                    accel.closest_point(p, max),
+                    from_slice.closest_point(p, max),
+                );
+                let key = |h: Option<PointHit>| {
+                    h.map(|h| {
+                        (
+                            h.prim,
+                            h.distance.to_bits(),
+                            h.point.to_array().map(f32::to_bits),
+                        )
+                    })
+                };
+                if key(a) != key(b) {
+                    fail(format!(
+                        "{a:?}, from the slice {b:?}, for the point {p:?} within {max}"
+                    ));
+                }
+            }
+        }
+    }
+}
+
 /// `n` random triangles in the cube from -1 to 1, each with two edges of length up to about
 /// `size × √3` from a random first vertex, drawn from `seed`: a scene for tests that need many
 /// triangles of one size (the lab templates' step tests).
@@ -917,6 +1023,10 @@ macro_rules! conformance_tests {
             #[test]
             fn random_scenes() {
                 $crate::conformance::check_random::<$accel>(&params());
+            }
+            #[test]
+            fn geometry_sources() {
+                $crate::conformance::check_geometry_sources::<$accel>(&params());
             }
         }
     };

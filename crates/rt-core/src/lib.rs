@@ -20,6 +20,12 @@
 //! assert!(accel.occluded(&ray));
 //! ```
 //!
+//! # Building from a mesh
+//! [`Accel::build_from`] builds over any [`Geometry`]: a slice, a [`Mesh`], or an
+//! [`IndexedTriangles`] view of position and index buffers the caller owns. Structures read the
+//! triangles through the indices straight into the layout they keep, with no triangle list in
+//! between (see the [`Geometry`] documentation and the README for what that saves).
+//!
 //! # Closest points
 //! [`Accel::closest_point`] finds the primitive nearest to a point (a [`PointHit`]: index, point,
 //! distance). Structures implement one traversal, [`Accel::ball_query`], over a [`BallQuery`]
@@ -50,6 +56,7 @@ mod brute;
 mod clip;
 mod closest;
 mod cost;
+mod geometry;
 mod gltf;
 pub mod instance;
 pub mod leaf;
@@ -83,6 +90,7 @@ pub use closest::{
     BallQuery, ClosestPointQuery, PointHit, closest_point_on_triangle, point_distance,
 };
 pub use cost::{PredictedCost, predicted_cost};
+pub use geometry::{Geometry, IndexedTriangles};
 pub use instance::{
     Bottom, Instance, InstanceError, InstanceHit, InstancePointHit, InstancePointQuery,
     InstanceTransform, LinearInstances, TransformPrimitive, TwoLevel, bottom_bytes,

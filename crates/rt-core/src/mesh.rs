@@ -55,6 +55,14 @@ pub enum MeshError {
         /// How many such elements there are.
         len: usize,
     },
+    /// A flat buffer ([`IndexedTriangles::from_flat`](crate::IndexedTriangles::from_flat))
+    /// whose length is not a multiple of three.
+    Ragged {
+        /// `"position"` or `"index"`.
+        buffer: &'static str,
+        /// Its length.
+        len: usize,
+    },
     /// Normal or texture-coordinate index triples do not number one per triangle.
     CountMismatch {
         /// `"normal"` or `"texture coordinate"`.
@@ -82,6 +90,10 @@ impl fmt::Display for MeshError {
                 f,
                 "triangle {triangle} uses {attribute} index {index} but the mesh has {len} {}",
                 plural(attribute)
+            ),
+            MeshError::Ragged { buffer, len } => write!(
+                f,
+                "the flat {buffer} buffer holds {len} numbers, not a multiple of three"
             ),
             MeshError::CountMismatch {
                 attribute,
@@ -145,6 +157,11 @@ fn check(
         }
     }
     Ok(())
+}
+
+/// Checks position index triples against `len` vertices.
+pub(crate) fn check_indices(len: usize, indices: &[[u32; 3]]) -> Result<(), MeshError> {
+    check("vertex", len, indices, None, false)
 }
 
 impl Mesh {

@@ -269,3 +269,54 @@ fn a_two_level_scene_that_loses_an_instance_or_a_t_fails_with_its_ray_named() {
     conformance::check_two_level_case::<rt_core::LinearInstances<Triangle>>(&[brute_bottom], &case)
         .expect("the linear reference agrees with itself and with the flattened scene");
 }
+
+/// Brute force, except that building from a mesh or another source reads the triangles in
+/// reverse order, as a builder that numbered them from the wrong end would.
+struct Reversed(BruteForce<Triangle>);
+
+impl Accel for Reversed {
+    type Prim = Triangle;
+    type Params = ();
+    const NAME: &'static str = "reversed";
+    fn presets() -> Vec<(&'static str, ())> {
+        vec![("default", ())]
+    }
+    fn build(prims: &[Triangle], _: &()) -> Self {
+        Self(BruteForce::build(prims, &()))
+    }
+    fn build_from<G: rt_core::Geometry<Prim = Triangle> + ?Sized>(g: &G, _: &()) -> Self {
+        let reversed: Vec<Triangle> = (0..g.len()).rev().map(|i| g.prim(i)).collect();
+        Self(BruteForce::build(&reversed, &()))
+    }
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        self.0.intersect_with(ray, stats)
+    }
+    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+        self.0.occluded_with(ray, stats)
+    }
+    fn bounds(&self) -> Aabb {
+        self.0.bounds()
+    }
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.ball_query(query, stats);
+    }
+    fn memory_bytes(&self) -> usize {
+        self.0.memory_bytes()
+    }
+    fn build_stats(&self) -> BuildStats {
+        self.0.build_stats()
+    }
+}
+
+#[test]
+fn a_structure_that_numbers_a_mesh_wrongly_fails_the_geometry_check() {
+    let failure = std::panic::catch_unwind(|| conformance::check_geometry_sources::<Reversed>(&()))
+        .expect_err("a reversed numbering must be caught");
+    let message = failure
+        .downcast_ref::<String>()
+        .expect("the kit panics with a formatted message");
+    assert!(
+        message.contains("reversed with () built from a Mesh on scene `shared_edge`"),
+        "{message}"
+    );
+}

@@ -217,12 +217,21 @@ impl<P: Primitive> Accel for Grid<P> {
     /// If the grid would hold more than 2³² - 1 references (far beyond what `max_cells` and
     /// memory allow for triangles).
     fn build(prims: &[P], params: &GridParams) -> Self {
-        let b = builder::build(prims, params);
+        Self::build_from(prims, params)
+    }
+
+    /// Copies the primitives once, into the vector the leaves index, and builds over that.
+    fn build_from<G: rt_core::Geometry<Prim = P> + ?Sized>(
+        geometry: &G,
+        params: &GridParams,
+    ) -> Self {
+        let prims = geometry.to_vec();
+        let b = builder::build(&prims, params);
         Self {
             shape: b.shape,
             cells: b.cells,
             refs: b.refs,
-            prims: prims.to_vec(),
+            prims,
             mailbox: params.mailbox,
             exact: params.exact_insertion,
             valid_prims: b.valid_prims,

@@ -197,12 +197,21 @@ impl<P: Primitive> Accel for HGrid<P> {
     /// If the grids would hold more than 2³² - 1 references or cells (far beyond what
     /// `max_cells` and memory allow for triangles).
     fn build(prims: &[P], params: &HGridParams) -> Self {
-        let b = builder::build(prims, params);
+        Self::build_from(prims, params)
+    }
+
+    /// Copies the primitives once, into the vector the leaves index, and builds over that.
+    fn build_from<G: rt_core::Geometry<Prim = P> + ?Sized>(
+        geometry: &G,
+        params: &HGridParams,
+    ) -> Self {
+        let prims = geometry.to_vec();
+        let b = builder::build(&prims, params);
         Self {
             levels: b.levels,
             cells: b.cells,
             refs: b.refs,
-            prims: prims.to_vec(),
+            prims,
             mailbox: params.mailbox,
             valid_prims: b.valid_prims,
             depth: b.depth,

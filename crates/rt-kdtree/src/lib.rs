@@ -336,11 +336,20 @@ impl<P: Primitive> Accel for KdTree<P> {
     /// If the tree would need more than 2³⁰ nodes or references, the most an 8-byte node can
     /// index (far beyond what fits in memory for triangles).
     fn build(prims: &[P], params: &KdParams) -> Self {
-        let b = builder::build(prims, params);
+        Self::build_from(prims, params)
+    }
+
+    /// Copies the primitives once, into the vector the leaves index, and builds over that.
+    fn build_from<G: rt_core::Geometry<Prim = P> + ?Sized>(
+        geometry: &G,
+        params: &KdParams,
+    ) -> Self {
+        let prims = geometry.to_vec();
+        let b = builder::build(&prims, params);
         Self {
             nodes: b.nodes,
             refs: b.refs,
-            prims: prims.to_vec(),
+            prims,
             bounds: b.bounds,
             traversal: params.traversal,
             max_depth: b.max_depth,

@@ -263,13 +263,22 @@ impl<P: Primitive> Accel for Octree<P> {
     /// If the octree would hold more than 2³² - 1 references or blocks (far beyond what memory
     /// allows for triangles, since a split that would multiply references is refused).
     fn build(prims: &[P], params: &OctreeParams) -> Self {
-        let b = builder::build(prims, params);
+        Self::build_from(prims, params)
+    }
+
+    /// Copies the primitives once, into the vector the leaves index, and builds over that.
+    fn build_from<G: rt_core::Geometry<Prim = P> + ?Sized>(
+        geometry: &G,
+        params: &OctreeParams,
+    ) -> Self {
+        let prims = geometry.to_vec();
+        let b = builder::build(&prims, params);
         Self {
             root: b.root,
             blocks: b.blocks,
             refs: b.refs,
             bounds: b.bounds,
-            prims: prims.to_vec(),
+            prims,
             mailbox: params.mailbox,
             valid_prims: b.valid_prims,
             depth: b.depth,

@@ -7,9 +7,12 @@
 //! - `draw`: a slice through a built structure as SVG (see [`draw`]).
 //! - `render`: a Whitted-style picture through any structure, or per-pixel cost heatmaps (see
 //!   [`render`]).
+//! - `animate`: refitting against rebuilding on a moving scene, frame by frame (see
+//!   [`animate`]).
 //! - `scale`: the size ladder, build and trace cost and memory from thousands to millions of
 //!   triangles (see [`scale`]).
 
+mod animate;
 mod draw;
 mod explain;
 mod render;
@@ -48,6 +51,11 @@ enum Task {
     /// of triangles: build time per triangle, trace time per ray, bytes per triangle and peak
     /// build memory, as a table and optionally an SVG chart.
     Scale(scale::Args),
+    /// Follow a built-in animation (a wave through the mesh, or an explosion) frame by frame:
+    /// structures that can refit are refitted and rebuilt, the others rebuilt; per frame the
+    /// update time, trace time, their sum and the SAH cost, every frame checked against brute
+    /// force.
+    Animate(animate::Args),
 }
 
 fn main() -> ExitCode {
@@ -83,6 +91,17 @@ fn main() -> ExitCode {
             Ok(true) => ExitCode::SUCCESS,
             Ok(false) => {
                 eprintln!("error: rows disagree with the first row on some rays");
+                ExitCode::from(1)
+            }
+            Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        },
+        Task::Animate(args) => match animate::run(&args) {
+            Ok(true) => ExitCode::SUCCESS,
+            Ok(false) => {
+                eprintln!("error: some answers differ from brute force");
                 ExitCode::from(1)
             }
             Err(e) => {

@@ -35,10 +35,12 @@ use proptest::test_runner::{Config, TestRunner};
 use std::fmt;
 
 mod instances;
+mod refit;
 pub use instances::{
     BottomBuilder, InstancedCase, Placement, TWO_LEVEL_SCENES, check_two_level_case,
     check_two_level_random, check_two_level_scene, two_level_scene,
 };
+pub use refit::{check_refit_case, check_refit_random, check_refit_scenes};
 
 /// A disagreement between a structure and brute force on one ray.
 #[derive(Clone, Debug)]

@@ -320,3 +320,22 @@ fn a_structure_that_numbers_a_mesh_wrongly_fails_the_geometry_check() {
         "{message}"
     );
 }
+
+/// A refit that accepts every geometry and changes nothing, as one that forgot to re-read the
+/// primitives would.
+impl rt_core::Refit for Reversed {
+    fn refit<G: rt_core::Geometry<Prim = Triangle> + ?Sized>(
+        &mut self,
+        _: &G,
+    ) -> Result<(), rt_core::RefitError> {
+        Ok(())
+    }
+}
+
+#[test]
+fn a_refit_that_ignores_the_motion_fails_the_refit_kit() {
+    let s = scene("shared_edge");
+    let e = conformance::check_refit_case::<Reversed>(&(), &s.triangles, &s.rays)
+        .expect_err("answers for the old places must be caught");
+    assert!(e.starts_with("after refitting to a wave:"), "{e}");
+}

@@ -23,6 +23,7 @@
 //! `--structures mine,grid,bvh --json`, or `--report out`, as with `cargo xtask compare`.
 //! The crate needs `rt-core` and `rt-shootout` as dependencies (see the workspace README).
 
+pub mod animate;
 pub mod compare;
 pub mod explain;
 pub mod fuzz;

@@ -9,7 +9,7 @@ use rt_bvh::Bvh;
 use rt_core::glam::Vec3;
 use rt_core::{
     Aabb, Accel, BallQuery, Bottom, BruteForce, BuildStats, Counters, Hit, Instance, PointHit, Ray,
-    Region, Shape, Stats, Trace, Triangle, TwoLevel,
+    Refit, RefitError, Region, Shape, Stats, Trace, Triangle, TwoLevel,
 };
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
@@ -57,7 +57,22 @@ pub trait Traceable: Send + Sync {
     fn closest_timed(&self, points: &[(Vec3, f32)]) -> usize;
 }
 
+/// A built structure that can also follow its triangles when they move ([`Refit`]).
+pub trait Refittable: Traceable {
+    /// [`Refit::refit`] to `tris`.
+    ///
+    /// # Errors
+    /// As [`Refit::refit`]: the structure is then unchanged.
+    fn refit(&mut self, tris: &[Triangle]) -> Result<(), RefitError>;
+}
+
 struct Built<A>(A);
+
+impl<A: Refit<Prim = Triangle>> Refittable for Built<A> {
+    fn refit(&mut self, tris: &[Triangle]) -> Result<(), RefitError> {
+        self.0.refit(tris)
+    }
+}
 
 const CHUNK: usize = 256;
 const OCCLUDED: Hit = Hit {
@@ -177,6 +192,9 @@ impl<A: Accel<Prim = Triangle>> Traceable for Built<A> {
 /// Builds one row's structure over a scene.
 pub type Builder = Arc<dyn Fn(&[Triangle]) -> Box<dyn Traceable> + Send + Sync>;
 
+/// Builds one row's structure over a scene as one that can refit (`animate`).
+pub type RefitBuilder = Arc<dyn Fn(&[Triangle]) -> Box<dyn Refittable> + Send + Sync>;
+
 /// Builds one row's structure over a mesh as the bottom level of instances (`compare
 /// --instances`).
 pub type BottomBuilder = Arc<dyn Fn(&[Triangle]) -> Arc<dyn Bottom<Triangle>> + Send + Sync>;
@@ -197,6 +215,9 @@ pub struct Entry {
     /// primitive (see [`entries_of`]); `None` for triangle-only structures, which `render`
     /// cannot use.
     pub build_shapes: Option<ShapeBuilder>,
+    /// Builds the same as a structure that can refit, when its type implements [`Refit`] (see
+    /// [`entries_of_refittable`]); `None` for the others, which `animate` rebuilds every frame.
+    pub build_refittable: Option<RefitBuilder>,
 }
 
 impl std::fmt::Debug for Entry {
@@ -204,6 +225,7 @@ impl std::fmt::Debug for Entry {
         f.debug_struct("Entry")
             .field("name", &self.name)
             .field("renders", &self.build_shapes.is_some())
+            .field("refits", &self.build_refittable.is_some())
             .finish_non_exhaustive()
     }
 }
@@ -240,6 +262,7 @@ where
                 build_shapes: Some(Arc::new(move |shapes: &[Shape]| {
                     Box::new(S::build(shapes, &for_shapes)) as Box<dyn Tracer>
                 })),
+                build_refittable: None,
             }
         })
         .collect()
@@ -265,7 +288,27 @@ where
                     Arc::new(A::build(tris, &for_bottom)) as Arc<dyn Bottom<Triangle>>
                 }),
                 build_shapes: None,
+                build_refittable: None,
             }
+        })
+        .collect()
+}
+
+/// [`entries_of`] for a structure type that can refit: the same rows, each also buildable as
+/// a [`Refittable`] with its preset, for `animate`.
+pub fn entries_of_refittable<A, S>() -> Vec<Entry>
+where
+    A: Refit<Prim = Triangle> + 'static,
+    S: Accel<Prim = Shape, Params = A::Params> + 'static,
+{
+    entries_of::<A, S>()
+        .into_iter()
+        .zip(A::presets())
+        .map(|(mut entry, (_, params))| {
+            entry.build_refittable = Some(Arc::new(move |tris: &[Triangle]| {
+                Box::new(Built(A::build(tris, &params))) as Box<dyn Refittable>
+            }));
+            entry
         })
         .collect()
 }
@@ -282,7 +325,7 @@ where
 
 /// Every built-in structure and preset, in report order.
 pub fn all() -> Vec<Entry> {
-    let mut all = entries_of::<Bvh<Triangle>, Bvh<Shape>>();
+    let mut all = entries_of_refittable::<Bvh<Triangle>, Bvh<Shape>>();
     all.extend(entries_of::<KdTree<Triangle>, KdTree<Shape>>());
     all.extend(entries_of::<Grid<Triangle>, Grid<Shape>>());
     all.extend(entries_of::<HGrid<Triangle>, HGrid<Shape>>());

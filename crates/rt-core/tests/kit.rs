@@ -7,6 +7,33 @@ use rt_core::{Aabb, Accel, BallQuery, BruteForce, BuildStats, Hit, Ray, Stats, T
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
+/// The items every test structure below forwards to the brute force it wraps: each then
+/// writes only its name and the query it breaks.
+macro_rules! forward_to_brute_force {
+    () => {
+        type Prim = Triangle;
+        type Params = ();
+        fn presets() -> Vec<(&'static str, ())> {
+            vec![("default", ())]
+        }
+        fn build(prims: &[Triangle], _: &()) -> Self {
+            Self(BruteForce::build(prims, &()))
+        }
+        fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+            self.0.occluded_with(ray, stats)
+        }
+        fn bounds(&self) -> Aabb {
+            self.0.bounds()
+        }
+        fn memory_bytes(&self) -> usize {
+            self.0.memory_bytes()
+        }
+        fn build_stats(&self) -> BuildStats {
+            self.0.build_stats()
+        }
+    };
+}
+
 /// Lets the looping structure's stuck thread finish once its test has seen the failure.
 static RELEASE: AtomicBool = AtomicBool::new(false);
 
@@ -20,15 +47,8 @@ fn cursed(ray: &Ray) -> bool {
 struct Broken<const PANICS: bool>(BruteForce<Triangle>);
 
 impl<const PANICS: bool> Accel for Broken<PANICS> {
-    type Prim = Triangle;
-    type Params = ();
+    forward_to_brute_force!();
     const NAME: &'static str = "broken";
-    fn presets() -> Vec<(&'static str, ())> {
-        vec![("default", ())]
-    }
-    fn build(prims: &[Triangle], _: &()) -> Self {
-        Self(BruteForce::build(prims, &()))
-    }
     fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
         if cursed(ray) {
             assert!(
@@ -41,20 +61,8 @@ impl<const PANICS: bool> Accel for Broken<PANICS> {
         }
         self.0.intersect_with(ray, stats)
     }
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.0.occluded_with(ray, stats)
-    }
-    fn bounds(&self) -> Aabb {
-        self.0.bounds()
-    }
     fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
         self.0.ball_query(query, stats);
-    }
-    fn memory_bytes(&self) -> usize {
-        self.0.memory_bytes()
-    }
-    fn build_stats(&self) -> BuildStats {
-        self.0.build_stats()
     }
 }
 
@@ -90,23 +98,10 @@ impl<Q: BallQuery<Triangle>> BallQuery<Triangle> for Once<'_, Q> {
 }
 
 impl Accel for StopsAtFirst {
-    type Prim = Triangle;
-    type Params = ();
+    forward_to_brute_force!();
     const NAME: &'static str = "stops-at-first";
-    fn presets() -> Vec<(&'static str, ())> {
-        vec![("default", ())]
-    }
-    fn build(prims: &[Triangle], _: &()) -> Self {
-        Self(BruteForce::build(prims, &()))
-    }
     fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
         self.0.intersect_with(ray, stats)
-    }
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.0.occluded_with(ray, stats)
-    }
-    fn bounds(&self) -> Aabb {
-        self.0.bounds()
     }
     fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
         let mut once = Once {
@@ -114,12 +109,6 @@ impl Accel for StopsAtFirst {
             offered: false,
         };
         self.0.ball_query(&mut once, stats);
-    }
-    fn memory_bytes(&self) -> usize {
-        self.0.memory_bytes()
-    }
-    fn build_stats(&self) -> BuildStats {
-        self.0.build_stats()
     }
 }
 
@@ -275,15 +264,8 @@ fn a_two_level_scene_that_loses_an_instance_or_a_t_fails_with_its_ray_named() {
 struct Reversed(BruteForce<Triangle>);
 
 impl Accel for Reversed {
-    type Prim = Triangle;
-    type Params = ();
+    forward_to_brute_force!();
     const NAME: &'static str = "reversed";
-    fn presets() -> Vec<(&'static str, ())> {
-        vec![("default", ())]
-    }
-    fn build(prims: &[Triangle], _: &()) -> Self {
-        Self(BruteForce::build(prims, &()))
-    }
     fn build_from<G: rt_core::Geometry<Prim = Triangle> + ?Sized>(g: &G, _: &()) -> Self {
         let reversed: Vec<Triangle> = (0..g.len()).rev().map(|i| g.prim(i)).collect();
         Self(BruteForce::build(&reversed, &()))
@@ -291,20 +273,8 @@ impl Accel for Reversed {
     fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
         self.0.intersect_with(ray, stats)
     }
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.0.occluded_with(ray, stats)
-    }
-    fn bounds(&self) -> Aabb {
-        self.0.bounds()
-    }
     fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
         self.0.ball_query(query, stats);
-    }
-    fn memory_bytes(&self) -> usize {
-        self.0.memory_bytes()
-    }
-    fn build_stats(&self) -> BuildStats {
-        self.0.build_stats()
     }
 }
 

@@ -21,8 +21,8 @@
 
 use rt_benches::{BenchScene, peer_scenes};
 use rt_bvh::{Bvh, BvhParams};
-use rt_core::raygen::RayKind;
 use rt_core::{Accel, Hit, MtTriangle, Ray, Triangle};
+use rt_scene::raygen::RayKind;
 use std::fmt::Write as _;
 use std::time::Instant;
 

@@ -7,7 +7,7 @@ use rt_core::{Accel, BruteForce, MtTriangle, Ray, Rng, Triangle, glam::Vec3};
 use std::hint::black_box;
 
 fn benches(c: &mut Criterion) {
-    let tris = rt_core::scenes::random_soup(1000, 3).triangles();
+    let tris = rt_scene::scenes::random_soup(1000, 3).triangles();
     let mut rng = Rng::new(5);
     let rays: Vec<Ray> = (0..1000)
         .map(|_| Ray::new(rng.in_box(Vec3::ZERO, Vec3::ONE), rng.unit_vector()))

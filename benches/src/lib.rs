@@ -3,8 +3,11 @@
 #[cfg(feature = "embree")]
 pub mod embree;
 
-use rt_core::raygen::{self, Camera, RayKind};
-use rt_core::{Aabb, Hit, Primitive, Ray, Triangle, conformance::shared_meshes_dir, scenes};
+use rt_conformance::shared_meshes_dir;
+use rt_core::{Aabb, Hit, Primitive, Ray, Triangle};
+use rt_scene::Camera;
+use rt_scene::raygen::{self, RayKind};
+use rt_scene::scenes;
 
 /// A named triangle scene.
 #[derive(Debug)]
@@ -71,7 +74,7 @@ fn builtin(name: &'static str) -> BenchScene {
 /// If the shared meshes are missing under `CI=true`, or the file does not load.
 fn shared(name: &'static str, file: &str) -> Option<BenchScene> {
     let path = shared_meshes_dir()?.join(file);
-    let mesh = rt_core::load_obj(&path).unwrap_or_else(|e| panic!("{e}"));
+    let mesh = rt_scene::load_obj(&path).unwrap_or_else(|e| panic!("{e}"));
     Some(BenchScene {
         name,
         spec: path.display().to_string(),

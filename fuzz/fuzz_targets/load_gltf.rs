@@ -2,5 +2,5 @@
 #![no_main]
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    rt_shootout::fuzz::load(rt_core::SceneFormat::Gltf, data);
+    rt_shootout::fuzz::load(rt_scene::SceneFormat::Gltf, data);
 });

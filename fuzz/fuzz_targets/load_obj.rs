@@ -2,5 +2,5 @@
 #![no_main]
 
 libfuzzer_sys::fuzz_target!(|data: &[u8]| {
-    rt_shootout::fuzz::load(rt_core::SceneFormat::Obj, data);
+    rt_shootout::fuzz::load(rt_scene::SceneFormat::Obj, data);
 });

@@ -3,7 +3,7 @@
 mod common;
 
 use common::assert_one_line_error;
-use rt_core::conformance::shared_meshes_dir;
+use rt_conformance::shared_meshes_dir;
 use std::process::Output;
 
 fn compare(args: &[&str]) -> Output {
@@ -450,8 +450,8 @@ fn answers_are_bit_identical_on_one_thread_and_on_two() {
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("threads");
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("rays.txt");
-    let mesh = rt_core::scenes::builtin("teapot-in-stadium").unwrap();
-    let lines: Vec<String> = rt_core::raygen::incoherent_rays(&mesh.bounds(), 3000, 11)
+    let mesh = rt_scene::scenes::builtin("teapot-in-stadium").unwrap();
+    let lines: Vec<String> = rt_scene::raygen::incoherent_rays(&mesh.bounds(), 3000, 11)
         .iter()
         .map(|r| r.to_line())
         .collect();
@@ -503,10 +503,10 @@ fn sized_built_in_scenes_run() {
 
 #[test]
 fn ply_and_gltf_files_run_and_broken_ones_are_one_line_errors() {
-    use rt_core::save::{PlyEncoding, glb_bytes, gltf_embedded, ply_bytes};
+    use rt_scene::save::{PlyEncoding, glb_bytes, gltf_embedded, ply_bytes};
     let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("cli-formats");
     std::fs::create_dir_all(&dir).unwrap();
-    let mesh = rt_core::scenes::teapot_with_detail(0.0, 0.3);
+    let mesh = rt_scene::scenes::teapot_with_detail(0.0, 0.3);
     let files = [
         (
             "teapot.ply",

@@ -4,7 +4,7 @@
 mod common;
 
 use common::assert_one_line_error;
-use rt_core::conformance::shared_meshes_dir;
+use rt_conformance::shared_meshes_dir;
 use std::path::{Path, PathBuf};
 use std::process::Output;
 

@@ -16,7 +16,8 @@
 //! Last, a million copies of one triangle: the build time, and what one closest-hit ray costs.
 
 use rt_bvh::{Bvh, BvhParams};
-use rt_core::{Accel, Hit, Ray, Rng, Triangle, glam::Vec3, scenes};
+use rt_core::{Accel, Hit, Ray, Rng, Triangle, glam::Vec3};
+use rt_scene::scenes;
 use std::time::Instant;
 
 /// A line of `/proc/self/status` in KiB.

@@ -13,8 +13,9 @@
 //! median pass is reported; every configuration must answer exactly like the first.
 
 use rt_bvh::{Bvh, BvhParams, Kernels};
-use rt_core::raygen::{self, RayKind};
-use rt_core::{Accel, Hit, Primitive, Ray, Triangle, scenes};
+use rt_core::{Accel, Hit, Primitive, Ray, Triangle};
+use rt_scene::raygen::{self, RayKind};
+use rt_scene::scenes;
 use std::time::Instant;
 
 /// The configurations, each with one more step than the one before.
@@ -90,10 +91,10 @@ fn main() {
     let passes = args.get(2).copied().unwrap_or(3).max(1) as usize;
 
     let mut scenes_: Vec<(String, String, Vec<Triangle>)> = Vec::new();
-    if let Some(dir) = rt_core::conformance::shared_meshes_dir() {
+    if let Some(dir) = rt_conformance::shared_meshes_dir() {
         for (name, file) in [("bunny", "stanford-bunny.obj"), ("teapot", "teapot.obj")] {
             let path = dir.join(file);
-            let mesh = rt_core::load_obj(&path).unwrap_or_else(|e| {
+            let mesh = rt_scene::load_obj(&path).unwrap_or_else(|e| {
                 eprintln!("error: {e}");
                 std::process::exit(2)
             });

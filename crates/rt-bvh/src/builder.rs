@@ -14,8 +14,8 @@
 
 use crate::node::{ChildRef, Node, PACK, TriPack, WIDTH, WideNode};
 use crate::{BvhParams, Layout, MAX_DEPTH, SplitMethod};
-use rayon::prelude::*;
 use rt_core::glam::{Vec3, Vec3A};
+use rt_core::par;
 use rt_core::{Aabb, Geometry, Primitive, Triangle, TriangleTest};
 
 /// A box in SIMD registers for the build's inner loops.
@@ -177,8 +177,7 @@ pub(crate) fn build<G: Geometry + ?Sized>(prims: &G, params: &BvhParams) -> Buil
     let wide = params.layout == Layout::Wide;
     // PERF: below PAR_BUILD_MIN primitives the parallel build's overhead outweighs its gain
     // (teapot, 6,320 triangles: 1.1 ms sequential, 1.2 ms on 2 threads).
-    let parallel =
-        params.parallel && rayon::current_num_threads() > 1 && prims.len() >= PAR_BUILD_MIN;
+    let parallel = params.parallel && par::threads() > 1 && prims.len() >= PAR_BUILD_MIN;
     let Refs {
         mut refs,
         tests,
@@ -428,11 +427,10 @@ fn make_refs<G: Geometry + ?Sized>(prims: &G, parallel: bool) -> Refs {
         (r, ia + ib)
     };
     let (refs, (mut all, invalid)) = if parallel {
-        let refs: Vec<PrimRef> = (0..n).into_par_iter().map(make).collect();
-        let s = refs
-            .par_chunks(REFS_CHUNK)
-            .map(summary)
-            .reduce_with(merge)
+        let refs: Vec<PrimRef> = par::map_range(0..n, make);
+        let s = par::map_chunks(&refs, REFS_CHUNK, summary)
+            .into_iter()
+            .reduce(merge)
             .unwrap_or_else(|| summary(&[]));
         (refs, s)
     } else {
@@ -626,26 +624,23 @@ fn plan<G: ?Sized>(
     let map = BinMap::new(&set.cbounds, bins);
     let refs = &refs[set.start - base..set.end - base];
     if ctx.parallel && n >= PAR_BIN_MIN {
-        let merged = refs
-            .par_chunks(PAR_BIN_CHUNK)
-            .fold(
-                || {
-                    let mut b = Scratch::new();
-                    b.0.reset(bins);
-                    b
-                },
-                |mut b, chunk| {
-                    b.0.add(&mut b.1, chunk, &map, bins);
-                    b
-                },
-            )
-            .reduce_with(|mut a, b| {
+        *scratch = par::fold_chunks(
+            refs,
+            PAR_BIN_CHUNK,
+            || {
+                let mut b = Scratch::new();
+                b.0.reset(bins);
+                b
+            },
+            |mut b, chunk| {
+                b.0.add(&mut b.1, chunk, &map, bins);
+                b
+            },
+            |mut a, b| {
                 a.0.merge(&b.0, bins);
                 a
-            });
-        if let Some(m) = merged {
-            *scratch = m;
-        }
+            },
+        );
     } else if n >= 64 {
         scratch.0.reset(bins);
         scratch.0.add(&mut scratch.1, refs, &map, bins);
@@ -814,7 +809,7 @@ fn split<G: Geometry + ?Sized>(
     if ctx.parallel && left.len().min(right.len()) >= PAR_SUBTREE_MIN {
         // Both halves' binning at once: a wide node makes up to seven splits before its
         // children can be built in parallel, and the first ones are over large sets.
-        rayon::join(
+        par::join(
             || plan_set(ctx, lrefs, &mut left, scratch),
             || plan_set(ctx, rrefs, &mut right, &mut Scratch::new()),
         );
@@ -852,9 +847,7 @@ fn partition_any(
         return partition(refs, go_left);
     }
     let parts: Vec<_> = if parallel {
-        refs.par_chunks_mut(PARTITION_CHUNK)
-            .map(|c| partition(c, &go_left))
-            .collect()
+        par::map_chunks_mut(refs, PARTITION_CHUNK, |c| partition(c, &go_left))
     } else {
         refs.chunks_mut(PARTITION_CHUNK)
             .map(|c| partition(c, &go_left))
@@ -973,7 +966,7 @@ fn emit_binary<G: Geometry + ?Sized>(
             (v, sh)
         };
         let ((lv, ls), (rv, rs)) =
-            rayon::join(|| task(lo, base, left), || task(hi, right.start, right));
+            par::join(|| task(lo, base, left), || task(hi, right.start, right));
         for (first, (v, s)) in [(true, (lv, ls)), (false, (rv, rs))] {
             let offset = out.len() as u32;
             if !first {
@@ -1045,7 +1038,7 @@ fn presplit<G: Geometry + ?Sized>(
         let own = &mut refs[set.start - base..set.end - base];
         // At the right half's start, not the left half's length: dropped copies may lie between.
         let (lo, hi) = own.split_at_mut(r.start - set.start);
-        rayon::join(
+        par::join(
             || presplit(ctx, lo, l.start, l, levels - 1, &mut Scratch::new()),
             || presplit(ctx, hi, r.start, r, levels - 1, &mut Scratch::new()),
         )
@@ -1132,20 +1125,17 @@ fn emit_wide<G: Geometry + ?Sized>(
             slices.push((mine, k));
             rest = tail;
         }
-        let parts: Vec<(ChildRef, WideOut, Shape)> = slices
-            .into_par_iter()
-            .map(|(slice, k)| {
-                let mut o = WideOut::default();
-                let mut sh = Shape::default();
-                let start = k.set.start;
-                let c = emit_wide(ctx, slice, start, k, &mut o, &mut sh, &mut Scratch::new());
-                // The arrays grew by doubling, and all eight wait to be appended: their slack
-                // would add up to as much as the subtrees again.
-                o.nodes.shrink_to_fit();
-                o.packs.shrink_to_fit();
-                (c, o, sh)
-            })
-            .collect();
+        let parts: Vec<(ChildRef, WideOut, Shape)> = par::map_vec(slices, |(slice, k)| {
+            let mut o = WideOut::default();
+            let mut sh = Shape::default();
+            let start = k.set.start;
+            let c = emit_wide(ctx, slice, start, k, &mut o, &mut sh, &mut Scratch::new());
+            // The arrays grew by doubling, and all eight wait to be appended: their slack
+            // would add up to as much as the subtrees again.
+            o.nodes.shrink_to_fit();
+            o.packs.shrink_to_fit();
+            (c, o, sh)
+        });
         let mut built = Vec::with_capacity(parts.len());
         for (c, o, sh) in parts {
             shape.merge(sh);
@@ -1166,7 +1156,7 @@ fn emit_wide<G: Geometry + ?Sized>(
 
 /// Appends subtrees built into their own arrays, in order, relocating their node and pack
 /// indices; returns the relocated references to their roots. Nodes and packs are copied on
-/// rayon's threads: `par_extend` of an indexed iterator writes each element in its place.
+/// rayon's threads: `par::extend_range` writes each element in its place.
 ///
 /// PERF: appending the root's eight subtrees one after another (4.2 MB for the sphereflake)
 /// took 0.43 ms on one thread while the other waited.
@@ -1204,20 +1194,18 @@ fn append_all<G: ?Sized>(
     let part_of = |bases: &[usize], i: usize| bases.partition_point(|&b| b <= i) - 1;
     let first_node = out.nodes.len();
     let first_pack = out.packs.len();
-    out.nodes
-        .par_extend((first_node..nodes).into_par_iter().map(|i| {
-            let k = part_of(&node_base, i);
-            let mut n = parts[k].1.nodes[i - node_base[k]];
-            for ch in &mut n.children {
-                *ch = relocate(ChildRef(*ch), k).0;
-            }
-            n
-        }));
-    out.packs
-        .par_extend((first_pack..packs).into_par_iter().map(|i| {
-            let k = part_of(&pack_base, i);
-            parts[k].1.packs[i - pack_base[k]]
-        }));
+    par::extend_range(&mut out.nodes, first_node..nodes, |i| {
+        let k = part_of(&node_base, i);
+        let mut n = parts[k].1.nodes[i - node_base[k]];
+        for ch in &mut n.children {
+            *ch = relocate(ChildRef(*ch), k).0;
+        }
+        n
+    });
+    par::extend_range(&mut out.packs, first_pack..packs, |i| {
+        let k = part_of(&pack_base, i);
+        parts[k].1.packs[i - pack_base[k]]
+    });
     parts
         .iter()
         .enumerate()

@@ -194,7 +194,7 @@
 //! use rt_bvh::{Bvh, BvhParams};
 //! use rt_core::{Accel, Ray, glam::Vec3};
 //!
-//! let mesh = rt_core::load_obj("bunny.obj")?; // typed error naming file and line
+//! let mesh = rt_scene::load_obj("bunny.obj")?; // typed error naming file and line
 //! // Read straight from the indices into the packs; `Bvh::build(&mesh.triangles(), ..)` builds
 //! // the same tree through a triangle list.
 //! let bvh = Bvh::build_from(&mesh, &BvhParams::default());

@@ -3,24 +3,25 @@
 
 use rt_core::{Aabb, Triangle, TriangleTest};
 
-/// One node of the flattened binary tree: 32 bytes, two per 64-byte cache line.
-///
-/// Nodes are stored depth first: an interior node's first (left) child is the next node in the
-/// array, so only the second (right) child's index is stored. A leaf holds a contiguous range of
-/// the reordered primitive array.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct Node {
-    /// The box around everything below this node.
-    pub bounds: Aabb,
-    /// Leaf: index of the first primitive. Interior: index of the second child.
-    pub index: u32,
-    /// Leaf: number of primitives (at least 1). Interior: 0.
-    pub count: u16,
-    /// Interior: the axis (0, 1, 2) the children were split along. Leaf: 0.
-    pub axis: u8,
-    /// Always 0; keeps the layout free of implicit padding.
-    pub pad: u8,
+rt_core::pod_struct! {
+    /// One node of the flattened binary tree: 32 bytes, two per 64-byte cache line.
+    ///
+    /// Nodes are stored depth first: an interior node's first (left) child is the next node in the
+    /// array, so only the second (right) child's index is stored. A leaf holds a contiguous range of
+    /// the reordered primitive array.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct Node {
+        /// The box around everything below this node.
+        pub bounds: Aabb,
+        /// Leaf: index of the first primitive. Interior: index of the second child.
+        pub index: u32,
+        /// Leaf: number of primitives (at least 1). Interior: 0.
+        pub count: u16,
+        /// Interior: the axis (0, 1, 2) the children were split along. Leaf: 0.
+        pub axis: u8,
+        /// Always 0; keeps the layout free of implicit padding.
+        pub pad: u8,
+    }
 }
 
 const _: () = assert!(std::mem::size_of::<Node>() == 32);
@@ -42,23 +43,25 @@ impl Node {
 /// Children of one [`WideNode`].
 pub const WIDTH: usize = 8;
 
-/// One node of the 8-wide tree: the boxes of up to eight children as structure of arrays, so
-/// one SIMD slab test covers all of them, and a reference to each child. 256 bytes, four cache
-/// lines, aligned to a line (224 of them used).
-///
-/// Unused lanes hold the empty box (`min = +inf`, `max = -inf`), which no valid ray enters, and
-/// [`ChildRef::EMPTY`]; used lanes come first.
-#[repr(C, align(64))]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct WideNode {
-    /// Six rows of eight lanes: the children's minimum x, y, z, then maximum x, y, z.
-    pub bounds: [[f32; WIDTH]; 6],
-    /// Each child's [`ChildRef`], as its raw `u32`.
-    pub children: [u32; WIDTH],
-    /// Always 0. PERF: it makes a node four whole cache lines; packed to 224 bytes (aligned to
-    /// 32) the bunny's primary and shadow rays traced 2-3% slower, incoherent rays 1% faster
-    /// (three interleaved runs each, single-threaded).
-    pub pad: [u32; WIDTH],
+rt_core::pod_struct! {
+    /// One node of the 8-wide tree: the boxes of up to eight children as structure of arrays, so
+    /// one SIMD slab test covers all of them, and a reference to each child. 256 bytes, four cache
+    /// lines, aligned to a line (224 of them used).
+    ///
+    /// Unused lanes hold the empty box (`min = +inf`, `max = -inf`), which no valid ray enters, and
+    /// [`ChildRef::EMPTY`]; used lanes come first.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    #[repr(align(64))]
+    pub struct WideNode {
+        /// Six rows of eight lanes: the children's minimum x, y, z, then maximum x, y, z.
+        pub bounds: [[f32; WIDTH]; 6],
+        /// Each child's [`ChildRef`], as its raw `u32`.
+        pub children: [u32; WIDTH],
+        /// Always 0. PERF: it makes a node four whole cache lines; packed to 224 bytes (aligned to
+        /// 32) the bunny's primary and shadow rays traced 2-3% slower, incoherent rays 1% faster
+        /// (three interleaved runs each, single-threaded).
+        pub pad: [u32; WIDTH],
+    }
 }
 
 const _: () = assert!(std::mem::size_of::<WideNode>() == 256);
@@ -149,20 +152,22 @@ impl ChildRef {
 /// Triangles per [`TriPack`].
 pub const PACK: usize = 4;
 
-/// Four triangles pre-processed for a SIMD ray–triangle test, as structure of arrays: 160
-/// bytes, 40 per triangle.
-///
-/// For the watertight test the nine rows are the vertices `v0`, `v1`, `v2` (x, y, z each); for
-/// Möller–Trumbore they are `v0`, `e1 = v1 - v0` and `e2 = v2 - v0`, computed once at build
-/// time exactly as the scalar test computes them per ray. Unused lanes hold NaN coordinates,
-/// which every test rejects, and the id `u32::MAX`.
-#[repr(C, align(16))]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct TriPack {
-    /// Nine rows of four lanes (see the type's documentation).
-    pub rows: [[f32; PACK]; 9],
-    /// Each lane's triangle index in the build input; `u32::MAX` in unused lanes.
-    pub ids: [u32; PACK],
+rt_core::pod_struct! {
+    /// Four triangles pre-processed for a SIMD ray–triangle test, as structure of arrays: 160
+    /// bytes, 40 per triangle.
+    ///
+    /// For the watertight test the nine rows are the vertices `v0`, `v1`, `v2` (x, y, z each); for
+    /// Möller–Trumbore they are `v0`, `e1 = v1 - v0` and `e2 = v2 - v0`, computed once at build
+    /// time exactly as the scalar test computes them per ray. Unused lanes hold NaN coordinates,
+    /// which every test rejects, and the id `u32::MAX`.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    #[repr(align(16))]
+    pub struct TriPack {
+        /// Nine rows of four lanes (see the type's documentation).
+        pub rows: [[f32; PACK]; 9],
+        /// Each lane's triangle index in the build input; `u32::MAX` in unused lanes.
+        pub ids: [u32; PACK],
+    }
 }
 
 const _: () = assert!(std::mem::size_of::<TriPack>() == 160);

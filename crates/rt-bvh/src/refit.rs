@@ -4,8 +4,8 @@
 
 use crate::node::{ChildRef, TriPack, WIDTH, WideNode};
 use crate::{Bvh, Input, Layout, PACK};
-use rayon::prelude::*;
 use rt_core::glam::Vec3;
+use rt_core::par;
 use rt_core::{Aabb, Geometry, Primitive, Refit, RefitError, Triangle, TriangleTest};
 use std::collections::HashMap;
 
@@ -193,10 +193,11 @@ impl<P: Primitive> Bvh<P> {
         };
         let considered = len.min(u32::MAX as usize);
         let (valid, kind) = if self.parallel_refit(considered) {
-            (0..considered.div_ceil(REFIT_CHUNK))
-                .into_par_iter()
-                .map(|c| scan(c * REFIT_CHUNK..((c + 1) * REFIT_CHUNK).min(considered)))
-                .reduce(|| (0, None), |(va, ka), (vb, kb)| (va + vb, ka.or(kb)))
+            par::map_range(0..considered.div_ceil(REFIT_CHUNK), |c| {
+                scan(c * REFIT_CHUNK..((c + 1) * REFIT_CHUNK).min(considered))
+            })
+            .into_iter()
+            .fold((0, None), |(va, ka), (vb, kb)| (va + vb, ka.or(kb)))
         } else {
             scan(0..considered)
         };
@@ -232,7 +233,7 @@ impl<P: Primitive> Bvh<P> {
 
     /// Whether a refit over `n` primitives runs on rayon's threads.
     fn parallel_refit(&self, n: usize) -> bool {
-        self.parallel && n >= PAR_REFIT_MIN && rayon::current_num_threads() > 1
+        self.parallel && n >= PAR_REFIT_MIN && par::threads() > 1
     }
 
     /// The binary tree, children after their parents: leaves re-read their primitives, interior
@@ -277,7 +278,7 @@ impl<P: Primitive> Bvh<P> {
                 *pack = TriPack::new(&tris[..n], test);
             };
             if self.parallel_refit(self.packs.len() * PACK) {
-                self.packs.par_iter_mut().with_min_len(256).for_each(repack);
+                par::for_each_mut(&mut self.packs, 256, repack);
             } else {
                 self.packs.iter_mut().for_each(repack);
             }

@@ -302,7 +302,8 @@ fn distinct_ids(
 #[cfg(test)]
 mod tests {
     use crate::{Bvh, BvhParams};
-    use rt_core::{Accel, Triangle, scenes};
+    use rt_core::{Accel, Triangle};
+    use rt_scene::scenes;
 
     fn tree() -> Bvh<Triangle> {
         Bvh::build(&scenes::random_soup(500, 1).triangles(), &BvhParams::sah())

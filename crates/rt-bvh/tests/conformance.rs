@@ -3,7 +3,7 @@
 //! not), plus structural validation on the same scenes.
 
 use rt_bvh::{Bvh, BvhParams, Kernels};
-use rt_core::conformance::{self, SCENES};
+use rt_conformance::SCENES;
 use rt_core::{Accel, Sphere, Triangle};
 
 fn wide_with(kernels: Kernels) -> BvhParams {
@@ -13,11 +13,11 @@ fn wide_with(kernels: Kernels) -> BvhParams {
     }
 }
 
-rt_core::conformance_tests!(wide, Bvh<Triangle>, BvhParams::wide());
-rt_core::conformance_tests!(wide_sse2, Bvh<Triangle>, wide_with(Kernels::Sse2));
-rt_core::conformance_tests!(wide_portable, Bvh<Triangle>, wide_with(Kernels::Portable));
-rt_core::conformance_tests!(wide_scalar, Bvh<Triangle>, wide_with(Kernels::Scalar));
-rt_core::conformance_tests!(
+rt_conformance::conformance_tests!(wide, Bvh<Triangle>, BvhParams::wide());
+rt_conformance::conformance_tests!(wide_sse2, Bvh<Triangle>, wide_with(Kernels::Sse2));
+rt_conformance::conformance_tests!(wide_portable, Bvh<Triangle>, wide_with(Kernels::Portable));
+rt_conformance::conformance_tests!(wide_scalar, Bvh<Triangle>, wide_with(Kernels::Scalar));
+rt_conformance::conformance_tests!(
     wide_sequential,
     Bvh<Triangle>,
     BvhParams {
@@ -25,7 +25,7 @@ rt_core::conformance_tests!(
         ..BvhParams::wide()
     }
 );
-rt_core::conformance_tests!(
+rt_conformance::conformance_tests!(
     wide_unsorted_closest_any,
     Bvh<Triangle>,
     BvhParams {
@@ -34,24 +34,24 @@ rt_core::conformance_tests!(
         ..BvhParams::wide()
     }
 );
-rt_core::conformance_tests!(binary, Bvh<Triangle>, BvhParams::sah());
-rt_core::conformance_tests!(median, Bvh<Triangle>, BvhParams::median());
-rt_core::conformance_tests!(middle, Bvh<Triangle>, BvhParams::middle());
+rt_conformance::conformance_tests!(binary, Bvh<Triangle>, BvhParams::sah());
+rt_conformance::conformance_tests!(median, Bvh<Triangle>, BvhParams::median());
+rt_conformance::conformance_tests!(middle, Bvh<Triangle>, BvhParams::middle());
 
 #[test]
 fn spheres() {
-    conformance::check_random_spheres::<Bvh<Sphere>>(&BvhParams::sah());
+    rt_conformance::check_random_spheres::<Bvh<Sphere>>(&BvhParams::sah());
     // Spheres are no triangles: the wide tree keeps them in primitive leaves.
-    conformance::check_random_spheres::<Bvh<Sphere>>(&BvhParams::wide());
-    conformance::check_random_spheres::<Bvh<Sphere>>(&wide_with(Kernels::Portable));
-    conformance::check_random_spheres::<Bvh<Sphere>>(&wide_with(Kernels::Sse2));
+    rt_conformance::check_random_spheres::<Bvh<Sphere>>(&BvhParams::wide());
+    rt_conformance::check_random_spheres::<Bvh<Sphere>>(&wide_with(Kernels::Portable));
+    rt_conformance::check_random_spheres::<Bvh<Sphere>>(&wide_with(Kernels::Sse2));
 }
 
 #[test]
 fn validate_passes_on_every_scene_and_preset() {
     for (name, params) in Bvh::<Triangle>::presets() {
         for scene in SCENES {
-            let s = conformance::scene(scene);
+            let s = rt_conformance::scene(scene);
             let bvh = Bvh::build(&s.triangles, &params);
             if let Err(e) = bvh.validate() {
                 panic!("{name} on {scene}: {e}");

@@ -3,7 +3,7 @@
 //! and the flattened world-space triangles.
 
 use rt_bvh::{Bvh, BvhParams, Instances};
-use rt_core::conformance::{
+use rt_conformance::{
     BottomBuilder, TWO_LEVEL_SCENES, check_two_level_random, check_two_level_scene,
 };
 use rt_core::{Accel, Bottom, BruteForce, Triangle};

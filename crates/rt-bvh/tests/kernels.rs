@@ -9,7 +9,8 @@
 
 use rt_bvh::{Bvh, BvhParams, Kernels};
 use rt_core::glam::Vec3;
-use rt_core::{Accel, Counters, Hit, MtTriangle, Primitive, Ray, Rng, Triangle, scenes};
+use rt_core::{Accel, Counters, Hit, MtTriangle, Primitive, Ray, Rng, Triangle};
+use rt_scene::scenes;
 
 /// Rays aimed at the features of `tris` and along the planes of the tree's boxes.
 fn rays_for(tris: &[Triangle], boxes: &[rt_core::Aabb], n: usize, seed: u64) -> Vec<Ray> {
@@ -169,7 +170,7 @@ fn simd_kernels() -> Vec<Kernels> {
 fn scenes_for_kernels() -> Vec<(&'static str, Vec<Triangle>)> {
     vec![
         ("sphereflake", scenes::sphereflake(2, 5, 8).triangles()),
-        ("lattice", rt_core::conformance::lattice_triangles(3, 400)),
+        ("lattice", rt_conformance::lattice_triangles(3, 400)),
         ("soup", scenes::random_soup(3_000, 11).triangles()),
     ]
 }

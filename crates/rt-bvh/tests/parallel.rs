@@ -2,16 +2,17 @@
 //! the same as the sequential build.
 
 use rt_bvh::{Bvh, BvhParams};
-use rt_core::{Accel, MtTriangle, Primitive, Sphere, Triangle, glam::Vec3, scenes};
+use rt_core::{Accel, MtTriangle, Primitive, Sphere, Triangle, glam::Vec3};
+use rt_scene::scenes;
 
 /// Everything a tree is made of, as bytes.
-fn fingerprint<P: Primitive + bytemuck::Pod>(b: &Bvh<P>) -> Vec<u8> {
+fn fingerprint<P: Primitive + rt_core::bytemuck::Pod>(b: &Bvh<P>) -> Vec<u8> {
     let mut out = Vec::new();
-    out.extend_from_slice(bytemuck::cast_slice(b.nodes()));
-    out.extend_from_slice(bytemuck::cast_slice(b.wide_nodes()));
-    out.extend_from_slice(bytemuck::cast_slice(b.packs()));
-    out.extend_from_slice(bytemuck::cast_slice(b.primitives()));
-    out.extend_from_slice(bytemuck::cast_slice(b.primitive_ids()));
+    out.extend_from_slice(rt_core::bytemuck::cast_slice(b.nodes()));
+    out.extend_from_slice(rt_core::bytemuck::cast_slice(b.wide_nodes()));
+    out.extend_from_slice(rt_core::bytemuck::cast_slice(b.packs()));
+    out.extend_from_slice(rt_core::bytemuck::cast_slice(b.primitives()));
+    out.extend_from_slice(rt_core::bytemuck::cast_slice(b.primitive_ids()));
     out
 }
 
@@ -23,7 +24,7 @@ fn build_on<P: Primitive>(threads: usize, prims: &[P], params: &BvhParams) -> Bv
         .install(|| Bvh::build(prims, params))
 }
 
-fn check<P: Primitive + bytemuck::Pod>(name: &str, prims: &[P]) {
+fn check<P: Primitive + rt_core::bytemuck::Pod>(name: &str, prims: &[P]) {
     for (preset, params) in Bvh::<Triangle>::presets() {
         let sequential = Bvh::build(
             prims,

@@ -2,9 +2,8 @@
 //! keeps its invariants, refuses what it cannot follow, and reports its SAH drift.
 
 use rt_bvh::{Bvh, BvhParams};
-use rt_core::conformance;
-use rt_core::motion::explode;
 use rt_core::{Accel, MtTriangle, Refit, RefitError, Triangle};
+use rt_scene::motion::explode;
 
 fn presets() -> Vec<(&'static str, BvhParams)> {
     let mut all = Bvh::<Triangle>::presets();
@@ -21,34 +20,34 @@ fn presets() -> Vec<(&'static str, BvhParams)> {
 #[test]
 fn every_preset_passes_the_refit_kit_on_every_scene() {
     for (_, params) in presets() {
-        conformance::check_refit_scenes::<Bvh<Triangle>>(&params);
+        rt_conformance::check_refit_scenes::<Bvh<Triangle>>(&params);
     }
 }
 
 #[test]
 fn moller_trumbore_packs_are_refitted_as_a_fresh_build_packs_them() {
-    let tris = rt_core::scenes::builtin("sphereflake:20k")
+    let tris = rt_scene::scenes::builtin("sphereflake:20k")
         .expect("built-in scene")
         .triangles();
     let mt = |t: &[Triangle]| t.iter().map(|&t| MtTriangle(t)).collect::<Vec<_>>();
     let moved = explode(&tris, 0.02, 4);
     let mut bvh = Bvh::build(&mt(&tris), &BvhParams::wide());
     bvh.refit(&mt(&moved)).unwrap();
-    let rays = conformance::rays_into_cube(9, 2000);
+    let rays = rt_conformance::rays_into_cube(9, 2000);
     let reference = rt_core::BruteForce::build(&mt(&moved), &());
-    conformance::compare_rays(&bvh, &reference, &rays).unwrap();
+    rt_conformance::compare_rays(&bvh, &reference, &rays).unwrap();
     bvh.validate().unwrap();
 }
 
 #[test]
 fn random_refits_agree_with_brute_force() {
-    conformance::check_refit_random::<Bvh<Triangle>>(&BvhParams::wide());
-    conformance::check_refit_random::<Bvh<Triangle>>(&BvhParams::sah());
+    rt_conformance::check_refit_random::<Bvh<Triangle>>(&BvhParams::wide());
+    rt_conformance::check_refit_random::<Bvh<Triangle>>(&BvhParams::sah());
 }
 
 #[test]
 fn a_refitted_tree_validates_and_matches_a_fresh_build_of_the_same_shape() {
-    let tris = rt_core::scenes::builtin("sphereflake:20k")
+    let tris = rt_scene::scenes::builtin("sphereflake:20k")
         .expect("built-in scene")
         .triangles();
     for (name, params) in presets() {
@@ -69,9 +68,9 @@ fn a_refitted_tree_validates_and_matches_a_fresh_build_of_the_same_shape() {
         // Bytes, not `==`: unused pack lanes hold NaN.
         let fresh = Bvh::build(&tris, &params);
         let bytes = |b: &Bvh<Triangle>| {
-            let wide: &[u8] = bytemuck::cast_slice(b.wide_nodes());
-            let binary: &[u8] = bytemuck::cast_slice(b.nodes());
-            let packs: &[u8] = bytemuck::cast_slice(b.packs());
+            let wide: &[u8] = rt_core::bytemuck::cast_slice(b.wide_nodes());
+            let binary: &[u8] = rt_core::bytemuck::cast_slice(b.nodes());
+            let packs: &[u8] = rt_core::bytemuck::cast_slice(b.packs());
             [wide.to_vec(), binary.to_vec(), packs.to_vec()]
         };
         assert!(
@@ -84,7 +83,7 @@ fn a_refitted_tree_validates_and_matches_a_fresh_build_of_the_same_shape() {
 
 #[test]
 fn an_explosion_makes_the_refitted_tree_costlier_than_a_fresh_one() {
-    let tris = rt_core::scenes::builtin("teapot")
+    let tris = rt_scene::scenes::builtin("teapot")
         .expect("built-in scene")
         .triangles();
     let mut bvh = Bvh::build(&tris, &BvhParams::wide());
@@ -143,7 +142,7 @@ fn copies_that_part_ways_ask_for_a_rebuild() {
 #[test]
 fn large_refits_name_the_primitive_that_cannot_be_followed() {
     // 20k triangles: the parallel check.
-    let tris = rt_core::scenes::builtin("sphereflake:20k")
+    let tris = rt_scene::scenes::builtin("sphereflake:20k")
         .expect("built-in scene")
         .triangles();
     let mut bvh = Bvh::build(&tris, &BvhParams::wide());

@@ -23,14 +23,15 @@ pub const SLAB_FAR_SCALE: f32 = 1.0 + 1.0 / 65536.0;
 /// 10⁴ away, fails without the side cells.)
 pub const NEAR_TIE: f32 = 1.0 + 1.0 / 1_048_576.0;
 
-/// An axis-aligned box `[min, max]`. The empty box has `min = +inf`, `max = -inf`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct Aabb {
-    /// The lower corner.
-    pub min: Vec3,
-    /// The upper corner.
-    pub max: Vec3,
+crate::pod_struct! {
+    /// An axis-aligned box `[min, max]`. The empty box has `min = +inf`, `max = -inf`.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct Aabb {
+        /// The lower corner.
+        pub min: Vec3,
+        /// The upper corner.
+        pub max: Vec3,
+    }
 }
 
 impl Default for Aabb {

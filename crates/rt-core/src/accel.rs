@@ -104,8 +104,8 @@ pub struct Region {
 
 /// A ray-tracing acceleration structure over primitives of type [`Accel::Prim`].
 ///
-/// Contract, checked for every implementation by the conformance kit
-/// (module `rt_core::conformance`, behind the feature `conformance`):
+/// Contract, checked for every implementation by the conformance kit (the `rt-conformance`
+/// crate):
 /// - [`intersect`](Accel::intersect) returns exactly what [`BruteForce`](crate::BruteForce)
 ///   returns: the hit with the smallest `t` in `[ray.t_min, ray.t_max]`, ties broken by the
 ///   smallest primitive index ([`Hit::beats`]);

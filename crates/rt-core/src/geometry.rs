@@ -151,9 +151,9 @@ impl<'a> IndexedTriangles<'a> {
         if let Some(e) = ragged("position", positions.len()).or(ragged("index", indices.len())) {
             return Err(e);
         }
-        // Both casts are between arrays of the same 4-byte scalar, so alignment always holds
-        // and the lengths were checked above: neither can fail.
-        let positions: &[Vec3] = bytemuck::cast_slice(positions);
+        // Both views are of runs of three 4-byte scalars, so alignment always holds, and the
+        // lengths were checked above: neither can fail or drop an element.
+        let positions: &[Vec3] = crate::pod::vec3s(positions);
         let indices: &[[u32; 3]] = bytemuck::cast_slice(indices);
         Self::new(positions, indices)
     }
@@ -204,10 +204,22 @@ mod tests {
 
     #[test]
     fn every_source_hands_out_the_same_triangles() {
-        let mesh = crate::scenes::builtin("sphereflake").unwrap();
+        // A bumpy 5 × 5 grid of shared vertices: 32 triangles, each vertex used up to six times.
+        let positions: Vec<Vec3> = (0..25)
+            .map(|i| Vec3::new((i % 5) as f32, (i / 5) as f32, ((i * 7) % 3) as f32 * 0.25))
+            .collect();
+        let indices: Vec<[u32; 3]> = (0..16u32)
+            .flat_map(|q| {
+                let v = q / 4 * 5 + q % 4;
+                [[v, v + 1, v + 6], [v, v + 6, v + 5]]
+            })
+            .collect();
+        let mesh = Mesh::new(positions, indices).unwrap();
         let tris = mesh.triangles();
+        assert_eq!(tris.len(), 32);
         let view = mesh.view();
         assert_eq!(Geometry::len(&mesh), tris.len());
+        assert!(tris.iter().all(|t| t.is_valid()));
         assert_eq!(Geometry::len(&view), tris.len());
         assert_eq!(Geometry::to_vec(&mesh), tris);
         assert_eq!(view.to_vec(), tris);

@@ -33,7 +33,7 @@
 //! only by rounding: transforms round, so `t` differs by a few units in the last place (times
 //! the transform's condition number), and a ray within that distance of an edge may be credited
 //! to the triangle on the other side of it, or miss at a silhouette. The conformance kit checks
-//! both (`conformance::check_two_level`).
+//! both (`rt_conformance::check_two_level_case`).
 
 use crate::{
     Aabb, Accel, BallQuery, BuildStats, Counters, Hit, MtTriangle, NoStats, Primitive, Ray, Stats,
@@ -747,7 +747,7 @@ impl<P: TransformPrimitive> BallQuery<P> for ObjectBall<'_, P> {
 
 /// A two-level scene: instances of bottom-level structures, answered as one scene.
 ///
-/// Contract, checked by the conformance kit (`conformance::check_two_level`): every query
+/// Contract, checked by the conformance kit (`rt_conformance::check_two_level_case`): every query
 /// answers exactly as [`LinearInstances`] over the same instances does.
 pub trait TwoLevel<P: Primitive>: Sized + Send + Sync {
     /// Short name for reports.

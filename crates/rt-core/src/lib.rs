@@ -1,7 +1,11 @@
-//! Shared foundation of the `rt-accel` workspace: rays, boxes, primitives, the [`Accel`] trait
-//! every acceleration structure implements, traversal [`Stats`], the [`BruteForce`] reference,
-//! meshes and OBJ loading, built-in scenes, ray generation, and (feature `conformance`) the
-//! conformance kit that checks any structure against brute force.
+//! The contract of the `rt-accel` structures: rays, boxes, primitives, the [`Accel`] trait every
+//! acceleration structure implements, traversal [`Stats`], the [`BruteForce`] reference,
+//! geometry sources, closest points and instancing. It depends on glam and bytemuck only.
+//!
+//! Around it: `rt-scene` loads meshes (OBJ, PLY, glTF), makes procedural scenes and has the
+//! camera; `rt-conformance` is the kit that checks any structure (yours too) against brute
+//! force; the structures are crates of their own (`rt-bvh`, `rt-kdtree`, `rt-grid`,
+//! `rt-hgrid`, `rt-octree`).
 //!
 //! # Using a structure
 //! Structures live in their own crates (`rt-bvh`, ...) and all follow [`Accel`]:
@@ -46,8 +50,8 @@
 //! - The nearest primitive to a point is unique the same way: equal distances go to the smaller
 //!   index ([`PointHit::beats`]).
 //! - Invalid primitives (non-finite, zero-area; [`Primitive::is_valid`]) are never hit.
-//! - Nothing here panics on bad geometry or bad files: loaders return typed errors naming the
-//!   file and line.
+//! - Nothing here panics on bad geometry: invalid primitives are left out, invalid rays miss,
+//!   and malformed buffers give a typed [`MeshError`].
 #![warn(missing_docs)]
 
 mod aabb;
@@ -57,32 +61,22 @@ mod clip;
 mod closest;
 mod cost;
 mod geometry;
-mod gltf;
 pub mod instance;
 pub mod leaf;
-mod load;
 mod mailbox;
-pub mod measure;
 mod mesh;
-pub mod motion;
-mod obj;
-mod ply;
+pub mod par;
+mod pod;
 mod primitive;
 mod ray;
-pub mod raygen;
 mod refit;
 mod rng;
-pub mod save;
-pub mod scenes;
 mod shape;
 mod sphere;
 mod stats;
 mod surface;
 pub mod trace;
 mod triangle;
-
-#[cfg(feature = "conformance")]
-pub mod conformance;
 
 pub use aabb::{Aabb, NEAR_TIE, SLAB_FAR_SCALE};
 pub use accel::{Accel, BuildStats, Hit, Region, ValidationError};
@@ -98,10 +92,8 @@ pub use instance::{
     InstanceTransform, LinearInstances, TransformPrimitive, TwoLevel, bottom_bytes,
     closest_point_on_transformed_triangle, scene_margins,
 };
-pub use load::{LoadError, LoadErrorKind, SceneFormat, load_mesh, load_mesh_bytes};
 pub use mailbox::Mailbox;
 pub use mesh::{Mesh, MeshError, Shading};
-pub use obj::{load_obj, load_obj_bytes};
 pub use primitive::{PrimHit, Primitive, TriangleTest, valid_primitives};
 pub use ray::Ray;
 pub use refit::{Refit, RefitError};
@@ -115,3 +107,10 @@ pub use triangle::{MtTriangle, Shear, Triangle, moller_trumbore_edges};
 
 /// Re-exported so users name the same `Vec3` the library uses.
 pub use glam;
+
+/// Re-exported so users cast the same `Pod` types the library declares (nodes, packs, primitives:
+/// see [`pod_struct!`]).
+pub use bytemuck;
+
+#[doc(hidden)]
+pub use pod::PodField as __PodField;

@@ -3,14 +3,15 @@
 use crate::{Aabb, PrimHit, Primitive, Ray, SurfacePoint};
 use glam::Vec3;
 
-/// A sphere `|p - center| = radius`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct Sphere {
-    /// The centre.
-    pub center: Vec3,
-    /// The radius; must be positive and finite for the sphere to be valid.
-    pub radius: f32,
+crate::pod_struct! {
+    /// A sphere `|p - center| = radius`.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct Sphere {
+        /// The centre.
+        pub center: Vec3,
+        /// The radius; must be positive and finite for the sphere to be valid.
+        pub radius: f32,
+    }
 }
 
 impl Sphere {

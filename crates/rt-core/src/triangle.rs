@@ -3,27 +3,28 @@
 use crate::{Aabb, PrimHit, Primitive, Ray, SurfacePoint, TriangleTest};
 use glam::{DVec3, Vec3};
 
-/// A triangle given by its three vertices.
-///
-/// As a [`Primitive`] it uses the watertight test ([`Triangle::intersect_watertight`], Woop,
-/// Benthin & Wald 2013). That is the default because it is the only one of the two that never
-/// lets a ray slip through the shared edge or vertex of two triangles, so the conformance kit
-/// can demand that every structure finds such hits. It costs 1.28× the time of Möller–Trumbore
-/// per test (23.7 vs 18.5 ms for a million tests, `cargo bench -p rt-benches --bench
-/// primitives`), and 0–5% of a BVH's primary-ray speed (bunny 9.03 vs 9.24 Mrays/s,
-/// `--bench trace`); wrap triangles in [`MtTriangle`] to use Möller–Trumbore instead.
-///
-/// Zero-area triangles (and triangles with a non-finite vertex) are invalid: they never report a
-/// hit and structures leave them out.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct Triangle {
-    /// First vertex.
-    pub v0: Vec3,
-    /// Second vertex.
-    pub v1: Vec3,
-    /// Third vertex.
-    pub v2: Vec3,
+crate::pod_struct! {
+    /// A triangle given by its three vertices.
+    ///
+    /// As a [`Primitive`] it uses the watertight test ([`Triangle::intersect_watertight`], Woop,
+    /// Benthin & Wald 2013). That is the default because it is the only one of the two that never
+    /// lets a ray slip through the shared edge or vertex of two triangles, so the conformance kit
+    /// can demand that every structure finds such hits. It costs 1.28× the time of Möller–Trumbore
+    /// per test (23.7 vs 18.5 ms for a million tests, `cargo bench -p rt-benches --bench
+    /// primitives`), and 0–5% of a BVH's primary-ray speed (bunny 9.03 vs 9.24 Mrays/s,
+    /// `--bench trace`); wrap triangles in [`MtTriangle`] to use Möller–Trumbore instead.
+    ///
+    /// Zero-area triangles (and triangles with a non-finite vertex) are invalid: they never report a
+    /// hit and structures leave them out.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct Triangle {
+        /// First vertex.
+        pub v0: Vec3,
+        /// Second vertex.
+        pub v1: Vec3,
+        /// Third vertex.
+        pub v2: Vec3,
+    }
 }
 
 const _: () = assert!(std::mem::size_of::<Triangle>() == 36);
@@ -286,12 +287,13 @@ impl Triangle {
     }
 }
 
-/// A [`Triangle`] intersected with Möller–Trumbore instead of the watertight test.
-///
-/// Use it where speed matters more than closed edges; see [`Triangle`] for the trade-off.
-#[repr(transparent)]
-#[derive(Clone, Copy, Debug, PartialEq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct MtTriangle(pub Triangle);
+crate::pod_struct! {
+    /// A [`Triangle`] intersected with Möller–Trumbore instead of the watertight test.
+    ///
+    /// Use it where speed matters more than closed edges; see [`Triangle`] for the trade-off.
+    #[derive(Clone, Copy, Debug, PartialEq)]
+    pub struct MtTriangle(pub Triangle);
+}
 
 impl Primitive for MtTriangle {
     #[inline]

@@ -12,17 +12,17 @@
 //! one run.
 
 use rt_core::Accel;
-use rt_core::measure::measure;
-use rt_core::raygen::Camera;
 use rt_grid::{Grid, GridParams};
+use rt_scene::Camera;
+use rt_shootout::measure::measure;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let arg = std::env::args()
         .nth(1)
         .unwrap_or_else(|| "../shared/meshes/stanford-bunny.obj".into());
-    let mesh = match rt_core::scenes::builtin(&arg) {
+    let mesh = match rt_scene::scenes::builtin(&arg) {
         Some(mesh) => mesh,
-        None => rt_core::load_mesh(&arg)?,
+        None => rt_scene::load_mesh(&arg)?,
     };
     let tris = mesh.triangles();
     let rays = Camera::framing(&mesh.bounds(), 512, 384).primary_rays(512, 384);

@@ -8,7 +8,6 @@
 
 use crate::GridParams;
 use crate::cell::GridShape;
-use rayon::prelude::*;
 use rt_core::{Aabb, Primitive};
 
 /// Primitives handed to one rayon task when the build runs in parallel.
@@ -104,7 +103,7 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &GridParams) -> Built {
         out
     };
     let chunks: Vec<Vec<(u32, u32)>> = if params.parallel && ids.len() > CHUNK {
-        ids.par_chunks(CHUNK).map(pairs_of).collect()
+        rt_core::par::map_chunks(&ids, CHUNK, pairs_of)
     } else {
         vec![pairs_of(&ids)]
     };

@@ -78,7 +78,7 @@ mod tests {
     use rt_core::{Accel, Triangle};
 
     fn grid() -> Grid<Triangle> {
-        let mesh = rt_core::scenes::random_soup(300, 3);
+        let mesh = rt_scene::scenes::random_soup(300, 3);
         Grid::build(&mesh.triangles(), &GridParams::standard())
     }
 

@@ -1,13 +1,13 @@
 //! The conformance kit for every preset, plus structural validation on the same scenes.
 
-use rt_core::conformance::{self, SCENES};
+use rt_conformance::SCENES;
 use rt_core::{Accel, Sphere, Triangle};
 use rt_grid::{Grid, GridParams};
 
-rt_core::conformance_tests!(standard, Grid<Triangle>, GridParams::standard());
-rt_core::conformance_tests!(no_mailbox, Grid<Triangle>, GridParams::no_mailbox());
-rt_core::conformance_tests!(bbox, Grid<Triangle>, GridParams::bbox_insertion());
-rt_core::conformance_tests!(
+rt_conformance::conformance_tests!(standard, Grid<Triangle>, GridParams::standard());
+rt_conformance::conformance_tests!(no_mailbox, Grid<Triangle>, GridParams::no_mailbox());
+rt_conformance::conformance_tests!(bbox, Grid<Triangle>, GridParams::bbox_insertion());
+rt_conformance::conformance_tests!(
     coarse,
     Grid<Triangle>,
     GridParams {
@@ -15,7 +15,7 @@ rt_core::conformance_tests!(
         ..GridParams::standard()
     }
 );
-rt_core::conformance_tests!(
+rt_conformance::conformance_tests!(
     fine,
     Grid<Triangle>,
     GridParams {
@@ -26,14 +26,14 @@ rt_core::conformance_tests!(
 
 #[test]
 fn spheres_standard() {
-    conformance::check_random_spheres::<Grid<Sphere>>(&GridParams::standard());
+    rt_conformance::check_random_spheres::<Grid<Sphere>>(&GridParams::standard());
 }
 
 #[test]
 fn validate_passes_on_every_scene_and_preset() {
     for (name, params) in Grid::<Triangle>::presets() {
         for scene in SCENES {
-            let s = conformance::scene(scene);
+            let s = rt_conformance::scene(scene);
             let grid = Grid::build(&s.triangles, &params);
             if let Err(e) = grid.validate() {
                 panic!("{name} on {scene}: {e}");
@@ -44,7 +44,7 @@ fn validate_passes_on_every_scene_and_preset() {
 
 #[test]
 fn parallel_build_gives_the_same_grid() {
-    let mesh = rt_core::scenes::builtin("random-soup").expect("built-in scene");
+    let mesh = rt_scene::scenes::builtin("random-soup").expect("built-in scene");
     let tris = mesh.triangles();
     let seq = Grid::build(
         &tris,

@@ -6,7 +6,7 @@
 //! (hits beyond the current cell).
 
 use proptest::prelude::*;
-use rt_core::conformance::{
+use rt_conformance::{
     check_case, edge_grazing_case, lattice_rays, lattice_triangles as lattice_scene,
 };
 use rt_core::glam::Vec3;

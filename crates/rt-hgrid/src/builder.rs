@@ -12,7 +12,6 @@
 
 use crate::HGridParams;
 use crate::node::{Cell, Level};
-use rayon::prelude::*;
 use rt_core::{Aabb, Primitive};
 use rt_grid::{GridShape, cells_overlapping};
 
@@ -79,10 +78,7 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &HGridParams) -> Built {
     };
     // Chunks are in primitive order, so the concatenation is too.
     let pairs: Vec<(u32, u32)> = if params.parallel && ids.len() > CHUNK {
-        ids.par_chunks(CHUNK)
-            .map(pairs_of)
-            .collect::<Vec<_>>()
-            .concat()
+        rt_core::par::map_chunks(&ids, CHUNK, pairs_of).concat()
     } else {
         pairs_of(&ids)
     };

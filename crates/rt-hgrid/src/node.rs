@@ -2,14 +2,15 @@
 
 use rt_grid::GridShape;
 
-/// One cell: a range of primitive references, or a nested grid. 8 bytes.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct Cell {
-    /// First reference of a leaf; the nested grid's index for a parent cell.
-    first: u32,
-    /// Number of references, or [`Cell::PARENT`].
-    count: u32,
+rt_core::pod_struct! {
+    /// One cell: a range of primitive references, or a nested grid. 8 bytes.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub struct Cell {
+        /// First reference of a leaf; the nested grid's index for a parent cell.
+        first: u32,
+        /// Number of references, or [`Cell::PARENT`].
+        count: u32,
+    }
 }
 
 const _: () = assert!(size_of::<Cell>() == 8);

@@ -1,13 +1,13 @@
 //! The conformance kit for several shapes of hierarchy, plus structural validation.
 
-use rt_core::conformance::{self, SCENES};
+use rt_conformance::SCENES;
 use rt_core::{Accel, Sphere, Triangle};
 use rt_hgrid::{HGrid, HGridParams};
 
-rt_core::conformance_tests!(standard, HGrid<Triangle>, HGridParams::standard());
-rt_core::conformance_tests!(lean, HGrid<Triangle>, HGridParams::lean());
-rt_core::conformance_tests!(deep, HGrid<Triangle>, deep_params());
-rt_core::conformance_tests!(
+rt_conformance::conformance_tests!(standard, HGrid<Triangle>, HGridParams::standard());
+rt_conformance::conformance_tests!(lean, HGrid<Triangle>, HGridParams::lean());
+rt_conformance::conformance_tests!(deep, HGrid<Triangle>, deep_params());
+rt_conformance::conformance_tests!(
     one_level,
     HGrid<Triangle>,
     HGridParams {
@@ -15,7 +15,7 @@ rt_core::conformance_tests!(
         ..HGridParams::standard()
     }
 );
-rt_core::conformance_tests!(
+rt_conformance::conformance_tests!(
     no_mailbox,
     HGrid<Triangle>,
     HGridParams {
@@ -26,7 +26,7 @@ rt_core::conformance_tests!(
 
 #[test]
 fn spheres_standard() {
-    conformance::check_random_spheres::<HGrid<Sphere>>(&HGridParams::standard());
+    rt_conformance::check_random_spheres::<HGrid<Sphere>>(&HGridParams::standard());
 }
 
 /// Four levels, nested grids in every cell of two or more primitives.
@@ -44,7 +44,7 @@ fn deep_params() -> HGridParams {
 fn validate_passes_on_every_scene() {
     for params in [HGridParams::standard(), deep_params()] {
         for scene in SCENES {
-            let s = conformance::scene(scene);
+            let s = rt_conformance::scene(scene);
             let grid = HGrid::build(&s.triangles, &params);
             if let Err(e) = grid.validate() {
                 panic!("{params:?} on {scene}: {e}");
@@ -55,7 +55,7 @@ fn validate_passes_on_every_scene() {
 
 #[test]
 fn deep_hierarchies_nest_and_validate() {
-    let mesh = rt_core::scenes::builtin("random-soup").expect("built-in scene");
+    let mesh = rt_scene::scenes::builtin("random-soup").expect("built-in scene");
     let grid = HGrid::build(&mesh.triangles(), &deep_params());
     assert!(grid.levels().iter().any(|l| l.depth == 3), "four levels");
     assert!(grid.validate().is_ok());
@@ -63,7 +63,7 @@ fn deep_hierarchies_nest_and_validate() {
 
 #[test]
 fn parallel_build_gives_the_same_grids() {
-    let mesh = rt_core::scenes::builtin("random-soup").expect("built-in scene");
+    let mesh = rt_scene::scenes::builtin("random-soup").expect("built-in scene");
     let tris = mesh.triangles();
     let seq = HGrid::build(
         &tris,

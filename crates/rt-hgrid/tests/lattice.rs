@@ -4,7 +4,7 @@
 //! their edges and corners, and grazing rays cross between levels.
 
 use proptest::prelude::*;
-use rt_core::conformance::{check_case, edge_grazing_case, lattice_rays, lattice_triangles};
+use rt_conformance::{check_case, edge_grazing_case, lattice_rays, lattice_triangles};
 use rt_core::{Accel, Rng, Triangle};
 use rt_hgrid::{HGrid, HGridParams};
 

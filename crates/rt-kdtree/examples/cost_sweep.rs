@@ -7,19 +7,19 @@
 //! ```
 //!
 //! The rays are `cargo xtask compare`'s default primary rays (1024×768). The counts are
-//! deterministic; a build time is the best of three single-threaded builds (`rt_core::measure`,
+//! deterministic; a build time is the best of three single-threaded builds (`rt_shootout::measure`,
 //! which also times three traces), so compare the times only within one run.
 
 use rt_core::Accel;
-use rt_core::measure::measure;
-use rt_core::raygen::Camera;
 use rt_kdtree::{KdParams, KdTree};
+use rt_scene::Camera;
+use rt_shootout::measure::measure;
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let path = std::env::args()
         .nth(1)
         .unwrap_or_else(|| "../shared/meshes/stanford-bunny.obj".into());
-    let mesh = rt_core::load_mesh(&path)?;
+    let mesh = rt_scene::load_mesh(&path)?;
     let tris = mesh.triangles();
     let rays = Camera::framing(&mesh.bounds(), 1024, 768).primary_rays(1024, 768);
     println!(

@@ -270,9 +270,8 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &KdParams) -> Built {
         let (x, rest) = arena.split_at_mut(nx);
         let (y, z) = rest.split_at_mut(ny);
         if ctx.parallel && count >= PARALLEL_MIN_REFS {
-            use rayon::slice::ParallelSliceMut;
             for list in [x, y, z] {
-                list.par_sort_unstable();
+                rt_core::par::sort_unstable(list);
             }
         } else {
             for list in [x, y, z] {
@@ -339,7 +338,7 @@ fn build_into<P: Primitive>(
                 *arena = Vec::new();
             }
             if ctx.parallel {
-                let (l, r) = rayon::join(
+                let (l, r) = rt_core::par::join(
                     || subtree(ctx, left, larena),
                     || subtree(ctx, right, rarena),
                 );

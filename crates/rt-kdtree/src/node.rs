@@ -1,18 +1,19 @@
 //! The 8-byte node.
 
-/// One kd-tree node: 8 bytes, no bounding box.
-///
-/// - `word`: an interior node's split position (`f32` bits), or a leaf's reference count.
-/// - `packed`: the low two bits are the split axis (0, 1, 2) or 3 for a leaf; the upper 30 bits
-///   are an interior node's first child index (the second child is the next node: children are
-///   stored side by side) or a leaf's first index into the reference list.
-///
-/// So a tree holds at most 2³⁰ nodes and 2³⁰ references.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct Node {
-    word: u32,
-    packed: u32,
+rt_core::pod_struct! {
+    /// One kd-tree node: 8 bytes, no bounding box.
+    ///
+    /// - `word`: an interior node's split position (`f32` bits), or a leaf's reference count.
+    /// - `packed`: the low two bits are the split axis (0, 1, 2) or 3 for a leaf; the upper 30 bits
+    ///   are an interior node's first child index (the second child is the next node: children are
+    ///   stored side by side) or a leaf's first index into the reference list.
+    ///
+    /// So a tree holds at most 2³⁰ nodes and 2³⁰ references.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub struct Node {
+        word: u32,
+        packed: u32,
+    }
 }
 
 const _: () = assert!(size_of::<Node>() == 8);

@@ -110,7 +110,8 @@ impl<P: Primitive> KdTree<P> {
 #[cfg(test)]
 mod tests {
     use crate::{KdParams, KdTree, Node};
-    use rt_core::{Accel, Triangle, scenes};
+    use rt_core::{Accel, Triangle};
+    use rt_scene::scenes;
 
     fn tree() -> KdTree<Triangle> {
         KdTree::build(&scenes::random_soup(500, 1).triangles(), &KdParams::sah())

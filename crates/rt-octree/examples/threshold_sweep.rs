@@ -12,11 +12,11 @@
 //! 512×384 primary rays; builds and traces are single-threaded, and a time is the best of three,
 //! so compare times only within one run.
 
-use rt_core::measure::measure;
-use rt_core::raygen::Camera;
 use rt_core::{Accel, Ray, Triangle};
 use rt_grid::{Grid, GridParams};
 use rt_octree::{Octree, OctreeParams};
+use rt_scene::Camera;
+use rt_shootout::measure::measure;
 
 /// Measures `A` (best of three builds and traces) and prints one row.
 fn row<A: Accel<Prim = Triangle>>(
@@ -44,12 +44,12 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
     let arg = std::env::args()
         .nth(1)
         .unwrap_or_else(|| "../shared/meshes/stanford-bunny.obj".into());
-    let mesh = match rt_core::scenes::builtin(&arg) {
+    let mesh = match rt_scene::scenes::builtin(&arg) {
         Some(mesh) => mesh,
-        None => rt_core::load_mesh(&arg)?,
+        None => rt_scene::load_mesh(&arg)?,
     };
     let tris = mesh.triangles();
-    let camera = match rt_core::scenes::find(&arg) {
+    let camera = match rt_scene::scenes::find(&arg) {
         Some(scene) => scene.camera(&mesh.bounds(), 512, 384),
         None => Camera::framing(&mesh.bounds(), 512, 384),
     };

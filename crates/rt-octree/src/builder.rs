@@ -26,7 +26,7 @@
 
 use crate::OctreeParams;
 use crate::node::{Block, Node, child_box, midpoint, root_box};
-use rayon::prelude::*;
+use rt_core::par;
 use rt_core::{Aabb, Primitive, glam::Vec3};
 
 /// The deepest any octree goes (the root has depth 0): the traversal's fixed stack holds one
@@ -172,17 +172,12 @@ fn node<P: Primitive>(
     if ctx.parallel && n >= PARALLEL_MIN {
         // Each child's subtree is built into a part of its own, then appended in order, so the
         // layout is the sequential one.
-        let subtrees: Vec<(Node, Part)> = children
-            .into_iter()
-            .enumerate()
-            .collect::<Vec<_>>()
-            .into_par_iter()
-            .map(|(i, items)| {
-                let mut part = Part::default();
-                let node = child(i, items, &mut part);
-                (node, part)
-            })
-            .collect();
+        let numbered: Vec<_> = children.into_iter().enumerate().collect();
+        let subtrees: Vec<(Node, Part)> = par::map_vec(numbered, |(i, items)| {
+            let mut part = Part::default();
+            let node = child(i, items, &mut part);
+            (node, part)
+        });
         out.blocks
             .reserve_exact(subtrees.iter().map(|(_, p)| p.blocks.len()).sum());
         out.refs
@@ -265,7 +260,7 @@ pub(crate) fn split<P: Primitive>(
 /// The children's lists of [`split`], as one set of lists per chunk of `items` (chunks are split
 /// in parallel for large nodes); [`gather`] joins them.
 fn split_parts<P: Primitive>(ctx: &Ctx<'_, P>, items: &[Item], b: &Aabb) -> Vec<[Vec<Item>; 8]> {
-    let split = |chunk| {
+    let split = |chunk: &[Item]| {
         let mut lists = split(ctx.prims, chunk, b, ctx.margin);
         // The lists grew by doubling; a large node's chunks all wait for the join, so their
         // slack would add up to as much again as the lists themselves.
@@ -275,7 +270,7 @@ fn split_parts<P: Primitive>(ctx: &Ctx<'_, P>, items: &[Item], b: &Aabb) -> Vec<
     if !ctx.parallel || items.len() < PARALLEL_MIN {
         return vec![split(items)];
     }
-    items.par_chunks(PARALLEL_MIN).map(split).collect()
+    par::map_chunks(items, PARALLEL_MIN, split)
 }
 
 /// Joins the chunks' lists into the children's lists (of `counts` items), freeing each chunk's

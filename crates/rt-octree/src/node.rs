@@ -1,14 +1,15 @@
 //! The octree's node: a range of primitive references, or the index of a block of eight children.
 
-/// One node, 8 bytes. A leaf lists `refs[first..first + count]`; an interior node's eight children
-/// are the [`Block`] `blocks[first]`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct Node {
-    /// First reference of a leaf; the children's block for an interior node.
-    first: u32,
-    /// Number of references, or [`Node::INTERIOR`].
-    count: u32,
+rt_core::pod_struct! {
+    /// One node, 8 bytes. A leaf lists `refs[first..first + count]`; an interior node's eight children
+    /// are the [`Block`] `blocks[first]`.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    pub struct Node {
+        /// First reference of a leaf; the children's block for an interior node.
+        first: u32,
+        /// Number of references, or [`Node::INTERIOR`].
+        count: u32,
+    }
 }
 
 const _: () = assert!(size_of::<Node>() == 8);
@@ -68,16 +69,18 @@ impl Node {
     }
 }
 
-/// The eight children of an interior node, in one 64-byte cache line. Child `i` covers the upper
-/// half of its parent on axis `a` exactly when bit `a` of `i` is set (x is bit 0, y bit 1, z bit
-/// 2).
-///
-/// A block always holds all eight children, empty ones included: an empty leaf costs 8 bytes, and
-/// in exchange child `i` is simply `block.0[i]`, with no mask or popcount to decode, and the walk
-/// reads all eight in one cache line.
-#[repr(C, align(64))]
-#[derive(Clone, Copy, Debug, PartialEq, Eq, bytemuck::Pod, bytemuck::Zeroable)]
-pub struct Block(pub [Node; 8]);
+rt_core::pod_struct! {
+    /// The eight children of an interior node, in one 64-byte cache line. Child `i` covers the upper
+    /// half of its parent on axis `a` exactly when bit `a` of `i` is set (x is bit 0, y bit 1, z bit
+    /// 2).
+    ///
+    /// A block always holds all eight children, empty ones included: an empty leaf costs 8 bytes, and
+    /// in exchange child `i` is simply `block.0[i]`, with no mask or popcount to decode, and the walk
+    /// reads all eight in one cache line.
+    #[derive(Clone, Copy, Debug, PartialEq, Eq)]
+    #[repr(align(64))]
+    pub struct Block(pub [Node; 8]);
+}
 
 const _: () = assert!(size_of::<Block>() == 64 && align_of::<Block>() == 64);
 

@@ -1,13 +1,13 @@
 //! The conformance kit for several shapes of octree, plus structural validation.
 
-use rt_core::conformance::{self, SCENES};
+use rt_conformance::SCENES;
 use rt_core::{Accel, Sphere, Triangle};
 use rt_octree::{Octree, OctreeParams};
 
-rt_core::conformance_tests!(standard, Octree<Triangle>, OctreeParams::standard());
-rt_core::conformance_tests!(lean, Octree<Triangle>, OctreeParams::lean());
-rt_core::conformance_tests!(deep, Octree<Triangle>, deep_params());
-rt_core::conformance_tests!(
+rt_conformance::conformance_tests!(standard, Octree<Triangle>, OctreeParams::standard());
+rt_conformance::conformance_tests!(lean, Octree<Triangle>, OctreeParams::lean());
+rt_conformance::conformance_tests!(deep, Octree<Triangle>, deep_params());
+rt_conformance::conformance_tests!(
     no_mailbox,
     Octree<Triangle>,
     OctreeParams {
@@ -15,7 +15,7 @@ rt_core::conformance_tests!(
         ..OctreeParams::standard()
     }
 );
-rt_core::conformance_tests!(
+rt_conformance::conformance_tests!(
     root_leaf,
     Octree<Triangle>,
     OctreeParams {
@@ -26,12 +26,12 @@ rt_core::conformance_tests!(
 
 #[test]
 fn spheres_standard() {
-    conformance::check_random_spheres::<Octree<Sphere>>(&OctreeParams::standard());
+    rt_conformance::check_random_spheres::<Octree<Sphere>>(&OctreeParams::standard());
 }
 
 #[test]
 fn spheres_deep() {
-    conformance::check_random_spheres::<Octree<Sphere>>(&deep_params());
+    rt_conformance::check_random_spheres::<Octree<Sphere>>(&deep_params());
 }
 
 /// Every node with more than one primitive is cut, down to the deepest level allowed.
@@ -47,7 +47,7 @@ fn deep_params() -> OctreeParams {
 fn validate_passes_on_every_scene() {
     for params in [OctreeParams::standard(), deep_params()] {
         for scene in SCENES {
-            let s = conformance::scene(scene);
+            let s = rt_conformance::scene(scene);
             let tree = Octree::build(&s.triangles, &params);
             if let Err(e) = tree.validate() {
                 panic!("{params:?} on {scene}: {e}");
@@ -58,7 +58,7 @@ fn validate_passes_on_every_scene() {
 
 #[test]
 fn parallel_build_gives_the_same_tree() {
-    let mesh = rt_core::scenes::builtin("random-soup").expect("built-in scene");
+    let mesh = rt_scene::scenes::builtin("random-soup").expect("built-in scene");
     let tris = mesh.triangles();
     let seq = Octree::build(
         &tris,

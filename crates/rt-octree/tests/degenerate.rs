@@ -2,7 +2,7 @@
 //! traced exactly: identical triangles, triangles overlapping around a point or a plane, and large
 //! triangles crossing every node, built with the most aggressive parameters.
 
-use rt_core::conformance::check_case;
+use rt_conformance::check_case;
 use rt_core::glam::Vec3;
 use rt_core::{Accel, Ray, Rng, Triangle};
 use rt_octree::{MAX_DEPTH, Octree, OctreeParams};

@@ -6,7 +6,7 @@
 //! rays pass within 10⁻⁷ of node edges from up to 10⁴ away.
 
 use proptest::prelude::*;
-use rt_core::conformance::{check_case, edge_grazing_case, lattice_rays, lattice_triangles};
+use rt_conformance::{check_case, edge_grazing_case, lattice_rays, lattice_triangles};
 use rt_core::{Accel, Rng, Triangle, glam::Vec3};
 use rt_octree::{Octree, OctreeParams};
 

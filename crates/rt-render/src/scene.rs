@@ -1,8 +1,9 @@
 //! What a render needs besides geometry: materials, lights, a camera, a sky; and the built-in
 //! scenes.
 
-use rt_core::raygen::Camera;
-use rt_core::{Aabb, Mesh, Primitive, Shape, Sphere, glam::Vec3, scenes};
+use rt_core::{Aabb, Mesh, Primitive, Shape, Sphere, glam::Vec3};
+use rt_scene::Camera;
+use rt_scene::scenes;
 
 /// How a surface reflects and transmits light, in the Whitted model: a Lambert term plus a
 /// Phong highlight for each light, then a mirror and a refracted ray where the surface asks.
@@ -152,11 +153,11 @@ impl RenderScene {
     }
 
     /// A mesh as a scene: one plastic material, a white light above and to the side at twice
-    /// the mesh's radius ([`rt_core::raygen::default_light`]), a dim fill light from the camera's
+    /// the mesh's radius ([`rt_scene::raygen::default_light`]), a dim fill light from the camera's
     /// side, and `camera` (for example [`Camera::framing`] the mesh).
     pub fn from_mesh(mesh: Mesh, camera: Camera) -> Self {
         let bounds = mesh.bounds();
-        let key = rt_core::raygen::default_light(&bounds);
+        let key = rt_scene::raygen::default_light(&bounds);
         let fill = camera.eye + (camera.eye - bounds.center()) * 0.5 + Vec3::Y * 0.1;
         Self {
             mesh_materials: vec![0; mesh.triangle_count()],
@@ -181,7 +182,7 @@ impl RenderScene {
     }
 
     /// The built-in Whitted scene: a checkerboard floor, a glass sphere, a mirror sphere and the
-    /// procedural teapot ([`rt_core::scenes::teapot`], 44k triangles), two lights and its own
+    /// procedural teapot ([`rt_scene::scenes::teapot`], 44k triangles), two lights and its own
     /// camera. Named `whitted` in [`scene`].
     pub fn whitted() -> Self {
         let mut mesh = Mesh::new(
@@ -262,7 +263,7 @@ impl RenderScene {
 }
 
 /// The names [`scene`] accepts besides files: `whitted` and every built-in mesh scene of
-/// [`rt_core::scenes`].
+/// [`rt_scene::scenes`].
 pub fn builtin_names() -> Vec<&'static str> {
     let mut names = vec!["whitted"];
     names.extend(scenes::BUILTIN_SCENES.iter().map(|s| s.name));
@@ -275,13 +276,13 @@ pub fn builtin_names() -> Vec<&'static str> {
 ///
 /// # Errors
 /// The loader's error (naming the file and line) for a file that cannot be read or parsed.
-pub fn scene(spec: &str, width: u32, height: u32) -> Result<RenderScene, rt_core::LoadError> {
+pub fn scene(spec: &str, width: u32, height: u32) -> Result<RenderScene, rt_scene::LoadError> {
     if spec == "whitted" {
         return Ok(RenderScene::whitted());
     }
     let mesh = match scenes::builtin(spec) {
         Some(mesh) => mesh,
-        None => rt_core::load_mesh(spec)?,
+        None => rt_scene::load_mesh(spec)?,
     };
     let bounds = mesh.bounds();
     let camera = scenes::camera_for(spec, &bounds, width, height);

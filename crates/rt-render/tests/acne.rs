@@ -7,7 +7,7 @@
 //! same rays started at the hit point itself, without the offset, do hit their own surface.
 
 use rt_bvh::Bvh;
-use rt_core::conformance::shared_meshes_dir;
+use rt_conformance::shared_meshes_dir;
 use rt_core::{Accel, Primitive, Ray, Shape};
 use rt_render::{RenderOptions, RenderScene, render};
 

@@ -11,8 +11,9 @@
 //! of the rays.
 
 use crate::structures::{self, Entry, Query, Traceable};
-use rt_core::motion::Animation;
-use rt_core::{Aabb, Accel, BruteForce, Hit, Primitive, Ray, Triangle, predicted_cost, scenes};
+use rt_core::{Aabb, Accel, BruteForce, Hit, Primitive, Ray, Triangle, predicted_cost};
+use rt_scene::motion::Animation;
+use rt_scene::scenes;
 use std::fmt::Write as _;
 use std::time::Instant;
 

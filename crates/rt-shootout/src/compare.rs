@@ -9,9 +9,9 @@
 use crate::structures::{self, Query, Traceable};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rt_bvh::Bvh;
-use rt_core::raygen;
-use rt_core::scenes::{self, BUILTIN_SCENES};
 use rt_core::{Aabb, Hit, PredictedCost, Primitive, Ray, Rng, Triangle, predicted_cost};
+use rt_scene::raygen;
+use rt_scene::scenes::{self, BUILTIN_SCENES};
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
@@ -314,7 +314,7 @@ pub fn load_scene(spec: &str) -> Result<(String, Vec<Triangle>), String> {
             names.join(", ")
         ));
     }
-    let mesh = rt_core::load_mesh(path).map_err(|e| e.to_string())?;
+    let mesh = rt_scene::load_mesh(path).map_err(|e| e.to_string())?;
     Ok((spec.to_string(), mesh.triangles()))
 }
 
@@ -630,7 +630,7 @@ fn make_rays(args: &Args, source: &Source) -> Result<(Vec<Ray>, &'static str, Qu
     let bounds = &source.bounds;
     let camera = if source.field.is_some() {
         // A field lies flat on the ground: seen from above at 45°, it fills the picture.
-        raygen::Camera::framing_from(
+        rt_scene::Camera::framing_from(
             bounds,
             rt_core::glam::Vec3::new(0.3, 1.5, 1.0),
             args.width,

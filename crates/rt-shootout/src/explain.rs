@@ -7,8 +7,9 @@
 
 use crate::compare;
 use crate::structures::{self, Entry, Query};
-use rt_core::raygen::parse_rays;
-use rt_core::{Aabb, Accel, BruteForce, Hit, Primitive, Ray, scenes};
+use rt_core::{Aabb, Accel, BruteForce, Hit, Primitive, Ray};
+use rt_scene::raygen::parse_rays;
+use rt_scene::scenes;
 
 /// Flags of `cargo xtask explain`.
 #[derive(clap::Args, Debug, Clone)]

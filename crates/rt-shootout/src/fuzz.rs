@@ -11,13 +11,14 @@
 //!   hit.
 
 use rt_bvh::{Bvh, BvhParams};
-use rt_core::conformance::compare_rays;
+use rt_conformance::compare_rays;
 use rt_core::glam::Vec3;
-use rt_core::{Accel, BruteForce, Ray, SceneFormat, Triangle, load_mesh_bytes};
+use rt_core::{Accel, BruteForce, Ray, Triangle};
 use rt_grid::{Grid, GridParams};
 use rt_hgrid::{HGrid, HGridParams};
 use rt_kdtree::{KdParams, KdTree};
 use rt_octree::{Octree, OctreeParams};
+use rt_scene::{SceneFormat, load_mesh_bytes};
 
 /// Loads `bytes` as `format`.
 ///

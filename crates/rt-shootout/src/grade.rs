@@ -3,7 +3,7 @@
 
 use crate::compare::{self, Args, Report};
 use crate::structures::{self, Builder, Entry, Query, Traceable};
-use rt_core::conformance::{self, SCENES};
+use rt_conformance::SCENES;
 use rt_core::{Accel, BuildStats, Hit, Region, Stats, Triangle};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -120,15 +120,15 @@ pub fn kit(entry: &Entry) -> Vec<Check> {
     let mut checks: Vec<Check> = SCENES
         .iter()
         .map(|&name| {
-            let s = conformance::scene(name);
+            let s = rt_conformance::scene(name);
             Check {
                 scene: name.to_string(),
-                failure: conformance::check_case::<Row>(&params, &s.triangles, &s.rays).err(),
+                failure: rt_conformance::check_case::<Row>(&params, &s.triangles, &s.rays).err(),
             }
         })
         .collect();
     let random = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
-        conformance::check_random::<Row>(&params)
+        rt_conformance::check_random::<Row>(&params)
     }));
     checks.push(Check {
         scene: "random_scenes".into(),

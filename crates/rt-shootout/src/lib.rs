@@ -28,6 +28,7 @@ pub mod compare;
 pub mod explain;
 pub mod fuzz;
 pub mod grade;
+pub mod measure;
 pub mod memory;
 pub mod report;
 pub mod scale;

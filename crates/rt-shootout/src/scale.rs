@@ -12,7 +12,8 @@
 
 use crate::memory;
 use crate::structures::{self, Entry, Query};
-use rt_core::{Hit, Triangle, scenes};
+use rt_core::{Hit, Triangle};
+use rt_scene::scenes;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::time::Instant;

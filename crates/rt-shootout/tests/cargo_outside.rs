@@ -36,10 +36,10 @@ rt-shootout = {{ path = "{shootout}" }}
     );
     let files = [
         ("Cargo.toml", manifest.as_str()),
-        ("src/main.rs", include_str!("../examples/shootout/main.rs")),
+        ("src/main.rs", include_str!("../examples/groups/main.rs")),
         (
             "src/groups.rs",
-            include_str!("../examples/shootout/groups.rs"),
+            include_str!("../examples/groups/groups.rs"),
         ),
     ];
     for (name, text) in files {

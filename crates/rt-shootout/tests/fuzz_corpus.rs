@@ -4,10 +4,11 @@
 //! The seeds are generated here, so they stay in step with the formats and the kit's scenes:
 //! `RT_BLESS=1 cargo test -p rt-shootout --test fuzz_corpus` rewrites them.
 
-use rt_core::conformance::{SCENES, lattice_rays, lattice_triangles, scene};
+use rt_conformance::{SCENES, lattice_rays, lattice_triangles, scene};
 use rt_core::glam::Vec3;
-use rt_core::save::{PlyEncoding, glb_bytes, gltf_embedded, ply_bytes};
-use rt_core::{Mesh, Ray, SceneFormat, Triangle};
+use rt_core::{Mesh, Ray, Triangle};
+use rt_scene::SceneFormat;
+use rt_scene::save::{PlyEncoding, glb_bytes, gltf_embedded, ply_bytes};
 use rt_shootout::fuzz;
 use std::path::{Path, PathBuf};
 

@@ -1,7 +1,7 @@
 //! A structure defined outside the workspace's crates joins the shootout through the public API
 //! alone, next to the built-in rows: what a student's crate does (with the example's structure).
 
-#[path = "../examples/shootout/groups.rs"]
+#[path = "../examples/groups/groups.rs"]
 mod groups;
 
 use groups::{GROUP, Groups};
@@ -111,7 +111,7 @@ fn grading_writes_every_check_and_the_first_failing_ray() {
     let md = shootout.grade(&args("groups")).unwrap();
     let text = std::fs::read_to_string(&md).unwrap();
     // Every fixed scene, and the random scenes.
-    let checks = rt_core::conformance::SCENES.len() + 1;
+    let checks = rt_conformance::SCENES.len() + 1;
     assert!(
         text.contains(&format!("{checks} of {checks} checks passed")),
         "{text}"

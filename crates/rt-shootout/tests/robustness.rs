@@ -3,7 +3,8 @@
 //! lets no ray from inside escape.
 
 use rt_core::glam::Vec3;
-use rt_core::{Counters, Hit, Ray, Triangle, raygen, scenes};
+use rt_core::{Counters, Hit, Ray, Triangle};
+use rt_scene::{raygen, scenes};
 use rt_shootout::structures::{self, Entry, Query};
 
 /// Runs `f` on a rayon pool of `threads` threads.

@@ -1,9 +1,9 @@
 //! The lab's tests, step by step: `cargo test step_3` runs step 3's. Each step's tests use only
 //! what that step and the ones before it build, and draw their scenes and rays from the
-//! conformance kit (`rt_core::conformance`) and brute force.
+//! conformance kit (`rt_conformance`) and brute force.
 
 use lab_bvh::{BvhParams, LabBvh, Node, Split, step1, step2, step3, step6};
-use rt_core::conformance::{self, SCENES, rays_into_cube, small_triangles};
+use rt_conformance::{SCENES, rays_into_cube, small_triangles};
 use rt_core::glam::Vec3;
 use rt_core::{Aabb, Accel, BruteForce, Counters, Hit, Primitive, Ray, Triangle};
 
@@ -167,7 +167,7 @@ fn step_2_tree_is_valid_balanced_and_depth_first() {
 #[test]
 fn step_2_every_scene_of_the_kit_builds_a_valid_tree() {
     for name in SCENES {
-        let scene = conformance::scene(name);
+        let scene = rt_conformance::scene(name);
         let bvh = LabBvh::build(&scene.triangles, &BvhParams::default());
         if let Err(e) = bvh.validate() {
             panic!("scene {name}: {e}");
@@ -255,7 +255,7 @@ fn step_3_order_depends_on_the_ray_and_on_t_max() {
     );
 }
 
-rt_core::conformance_tests!(closest_hit: step_4_closest_hit, LabBvh, BvhParams::default());
+rt_conformance::conformance_tests!(closest_hit: step_4_closest_hit, LabBvh, BvhParams::default());
 
 #[test]
 fn step_4_near_first_tests_only_the_nearest_sheets() {
@@ -309,7 +309,7 @@ fn step_4_near_first_tests_only_the_nearest_sheets() {
 
 // The conformance kit, as any structure meets it: every query against brute force, on every
 // scene of the kit (one test each) and on random scenes.
-rt_core::conformance_tests!(step_5_kit, LabBvh, BvhParams::default());
+rt_conformance::conformance_tests!(step_5_kit, LabBvh, BvhParams::default());
 
 #[test]
 fn step_5_any_hit_stops_at_the_first_hit() {
@@ -412,7 +412,7 @@ fn step_6_sah_makes_a_leaf_where_splitting_costs_more() {
 
 #[test]
 fn step_6_sah_beats_the_median_split_on_the_teapot_in_a_stadium() {
-    let mesh = rt_core::scenes::builtin("teapot-in-stadium").unwrap();
+    let mesh = rt_scene::scenes::builtin("teapot-in-stadium").unwrap();
     let tris = mesh.triangles();
     let sah = LabBvh::build(&tris, &BvhParams::sah());
     if let Err(e) = sah.validate() {
@@ -429,7 +429,7 @@ fn step_6_sah_beats_the_median_split_on_the_teapot_in_a_stadium() {
         median.sah_cost()
     );
     // And rays agree: the camera's rays through the middle of the picture.
-    let scene = rt_core::scenes::find("teapot-in-stadium").unwrap();
+    let scene = rt_scene::scenes::find("teapot-in-stadium").unwrap();
     let camera = scene.camera(&mesh.bounds(), 64, 48);
     let (mut with_sah, mut with_median) = (Counters::default(), Counters::default());
     for ray in camera.primary_rays(64, 48) {
@@ -444,4 +444,4 @@ fn step_6_sah_beats_the_median_split_on_the_teapot_in_a_stadium() {
 }
 
 // The kit again, on the SAH tree.
-rt_core::conformance_tests!(step_6_kit, LabBvh, BvhParams::sah());
+rt_conformance::conformance_tests!(step_6_kit, LabBvh, BvhParams::sah());

@@ -1,15 +1,15 @@
 //! The lab's tests, step by step: `cargo test step_3` runs step 3's. Each step's tests use only
 //! what that step and the ones before it build, and draw their scenes and rays from the
-//! conformance kit (`rt_core::conformance`) and brute force.
+//! conformance kit (`rt_conformance`) and brute force.
 
 use lab_grid::{GridParams, LabGrid, step1, step2, step3, step6};
-use rt_core::conformance::{self, rays_into_cube, small_triangles};
+use rt_conformance::{rays_into_cube, small_triangles};
 use rt_core::glam::Vec3;
 use rt_core::{Aabb, Accel, BruteForce, Counters, Hit, Primitive, Ray, Triangle};
 
 #[test]
 fn step_1_scene_bounds_ignore_invalid_triangles() {
-    let scene = conformance::scene("nan_vertex");
+    let scene = rt_conformance::scene("nan_vertex");
     let expected = scene
         .triangles
         .iter()
@@ -202,7 +202,7 @@ fn step_3_walk_visits_the_cells_the_ray_crosses_in_order() {
     }
 }
 
-rt_core::conformance_tests!(closest_hit: step_4_closest_hit, LabGrid, GridParams::default());
+rt_conformance::conformance_tests!(closest_hit: step_4_closest_hit, LabGrid, GridParams::default());
 
 #[test]
 fn step_4_a_hit_beyond_the_cell_does_not_end_the_walk() {
@@ -242,7 +242,7 @@ fn step_4_a_hit_beyond_the_cell_does_not_end_the_walk() {
 
 // The conformance kit, as any structure meets it: every query against brute force, on every
 // scene of the kit (one test each) and on random scenes.
-rt_core::conformance_tests!(step_5_kit, LabGrid, GridParams::default());
+rt_conformance::conformance_tests!(step_5_kit, LabGrid, GridParams::default());
 
 #[test]
 fn step_5_any_hit_stops_at_the_first_hit() {
@@ -312,4 +312,4 @@ fn step_6_no_ray_tests_a_triangle_twice_in_a_row_of_cells() {
     );
 }
 
-rt_core::conformance_tests!(step_6_kit, LabGrid, GridParams::mailboxed());
+rt_conformance::conformance_tests!(step_6_kit, LabGrid, GridParams::mailboxed());

@@ -1,10 +1,10 @@
 //! The lab's tests, step by step: `cargo test step_3` runs step 3's. Each step's tests use only
 //! what that step and the ones before it build, and draw their scenes and rays from the
-//! conformance kit (`rt_core::conformance`) and brute force.
+//! conformance kit (`rt_conformance`) and brute force.
 
 use lab_kdtree::step2::Visit;
 use lab_kdtree::{KdLabParams, LabKdTree, step1, step2, step3};
-use rt_core::conformance::{rays_into_cube, small_triangles};
+use rt_conformance::{rays_into_cube, small_triangles};
 use rt_core::glam::Vec3;
 use rt_core::{Aabb, Accel, BruteForce, Counters, Hit, NoStats, Ray, Triangle};
 
@@ -309,7 +309,7 @@ fn step_3_walk_counts_every_node_it_enters() {
     );
 }
 
-rt_core::conformance_tests!(closest_hit: step_4_closest_hit, LabKdTree, KdLabParams::default());
+rt_conformance::conformance_tests!(closest_hit: step_4_closest_hit, LabKdTree, KdLabParams::default());
 
 #[test]
 fn step_4_a_hit_beyond_the_leaf_does_not_end_the_walk() {
@@ -371,7 +371,7 @@ fn step_4_the_mailbox_skips_repeated_tests_and_changes_no_answer() {
 
 // The conformance kit, as any structure meets it: every query against brute force, on every
 // scene of the kit (one test each) and on random scenes.
-rt_core::conformance_tests!(step_5_kit, LabKdTree, KdLabParams::default());
+rt_conformance::conformance_tests!(step_5_kit, LabKdTree, KdLabParams::default());
 
 #[test]
 fn step_5_any_hit_stops_at_the_first_hit() {

@@ -7,7 +7,8 @@
 use super::{Args, Report, Row, Source, build_fastest, checked_subset};
 use crate::structures::{self, Traceable};
 use rt_core::glam::Vec3;
-use rt_core::{Aabb, PointHit, Primitive, raygen};
+use rt_core::{Aabb, PointHit, Primitive};
+use rt_scene::raygen;
 use std::time::{Duration, Instant};
 
 /// The report's `ray_kind` for closest-point queries.

@@ -1,7 +1,7 @@
 //! The conformance kit never hangs and always names the ray: structures that loop forever or
 //! panic on one ray fail with a short message naming that ray.
 
-use rt_core::conformance::{self, check_case_within, check_random, scene};
+use rt_conformance::{check_case_within, check_random, scene};
 use rt_core::glam::Vec3;
 use rt_core::{Aabb, Accel, BallQuery, BruteForce, BuildStats, Hit, Ray, Stats, Triangle};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -182,14 +182,14 @@ fn the_random_scenes_report_is_short() {
 fn the_test_macro_lists_every_scene_of_the_kit() {
     // `conformance_tests!` spells the scene names out (a macro cannot loop over a const slice):
     // if the kit grows a scene, the macro's list must grow too.
-    let source = include_str!("../src/conformance.rs");
+    let source = include_str!("../src/lib.rs");
     let start = source
         .find("conformance_tests!(@each $check, $accel;")
         .expect("the macro's scene list");
     let list = &source[start..];
     let list = &list[list.find(';').unwrap() + 1..list.find(')').unwrap()];
     let listed: Vec<&str> = list.split_whitespace().collect();
-    assert_eq!(listed, rt_core::conformance::SCENES);
+    assert_eq!(listed, rt_conformance::SCENES);
 }
 
 /// The linear reference with one fault: it never looks at the instance at index 1, or it
@@ -244,19 +244,22 @@ fn brute_bottom(t: &[Triangle]) -> std::sync::Arc<dyn rt_core::Bottom<Triangle>>
 
 #[test]
 fn a_two_level_scene_that_loses_an_instance_or_a_t_fails_with_its_ray_named() {
-    let case = conformance::two_level_scene("mirrored_and_scaled").remove(0);
-    let lost = conformance::check_two_level_case::<SkipsOne<false>>(&[brute_bottom], &case)
+    let case = rt_conformance::two_level_scene("mirrored_and_scaled").remove(0);
+    let lost = rt_conformance::check_two_level_case::<SkipsOne<false>>(&[brute_bottom], &case)
         .expect_err("an instance that moved away must be missed");
     assert!(
         lost.contains("disagrees with the linear reference") && lost.contains("ray: Ray::"),
         "{lost}"
     );
-    let late = conformance::check_two_level_case::<SkipsOne<true>>(&[brute_bottom], &case)
+    let late = rt_conformance::check_two_level_case::<SkipsOne<true>>(&[brute_bottom], &case)
         .expect_err("a late t must be caught");
     assert!(late.contains("intersect disagrees"), "{late}");
     // The reference itself passes.
-    conformance::check_two_level_case::<rt_core::LinearInstances<Triangle>>(&[brute_bottom], &case)
-        .expect("the linear reference agrees with itself and with the flattened scene");
+    rt_conformance::check_two_level_case::<rt_core::LinearInstances<Triangle>>(
+        &[brute_bottom],
+        &case,
+    )
+    .expect("the linear reference agrees with itself and with the flattened scene");
 }
 
 /// Brute force, except that building from a mesh or another source reads the triangles in
@@ -280,8 +283,9 @@ impl Accel for Reversed {
 
 #[test]
 fn a_structure_that_numbers_a_mesh_wrongly_fails_the_geometry_check() {
-    let failure = std::panic::catch_unwind(|| conformance::check_geometry_sources::<Reversed>(&()))
-        .expect_err("a reversed numbering must be caught");
+    let failure =
+        std::panic::catch_unwind(|| rt_conformance::check_geometry_sources::<Reversed>(&()))
+            .expect_err("a reversed numbering must be caught");
     let message = failure
         .downcast_ref::<String>()
         .expect("the kit panics with a formatted message");
@@ -305,7 +309,7 @@ impl rt_core::Refit for Reversed {
 #[test]
 fn a_refit_that_ignores_the_motion_fails_the_refit_kit() {
     let s = scene("shared_edge");
-    let e = conformance::check_refit_case::<Reversed>(&(), &s.triangles, &s.rays)
+    let e = rt_conformance::check_refit_case::<Reversed>(&(), &s.triangles, &s.rays)
         .expect_err("answers for the old places must be caught");
     assert!(e.starts_with("after refitting to a wave:"), "{e}");
 }

@@ -2,13 +2,13 @@
 //! fidelity to the flattened world-space triangles within the rounding the transforms allow.
 
 use super::{STALL_LIMIT, proptest_failure, scene, scene_points, stall_stops_shrinking};
-use crate::{
-    Accel, Bottom, BruteForce, Counters, Hit, Instance, InstanceHit, InstancePointHit,
-    LinearInstances, Primitive, Ray, Rng, Triangle, TwoLevel, scene_margins,
-};
 use glam::{Affine3A, Quat, Vec3};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
+use rt_core::{
+    Accel, Bottom, BruteForce, Counters, Hit, Instance, InstanceHit, InstancePointHit,
+    LinearInstances, Primitive, Ray, Rng, Triangle, TwoLevel, scene_margins,
+};
 use std::collections::HashMap;
 use std::sync::Arc;
 
@@ -190,7 +190,7 @@ pub fn two_level_scene(name: &str) -> Vec<InstancedCase> {
                 rays,
             }]
         }
-        _ => panic!("unknown two-level scene `{name}`; see rt_core::conformance::TWO_LEVEL_SCENES"),
+        _ => panic!("unknown two-level scene `{name}`; see rt_conformance::TWO_LEVEL_SCENES"),
     }
 }
 

@@ -9,11 +9,12 @@
 //! Errors name the file and, for ASCII files, the line; for binary files the element (such as
 //! `face 12`), since a binary file has no lines.
 
-use crate::load::{LoadErrorKind, LoadResult, Located};
-use crate::{Mesh, obj::triangulate};
+use crate::error::{LoadErrorKind, LoadResult, Located};
+use crate::polygon::triangulate;
 use glam::Vec3;
 use ply_rs_bw::parser::{Parser, Reader};
 use ply_rs_bw::ply::{Encoding, Property, PropertyAccess, PropertyAccessResult, PropertyType};
+use rt_core::Mesh;
 use std::io::BufReader;
 
 /// A vertex's position as read; `seen` has bit `a` set once coordinate `a` was read.

@@ -12,13 +12,13 @@
 //! 32-bit floats, as the glTF specification requires; indices 8, 16 or 32-bit unsigned integers.
 //! Sparse accessors (used for morph targets, not for base geometry) are not read.
 
-use crate::Mesh;
-use crate::load::{LoadErrorKind, LoadResult, Located};
+use crate::error::{LoadErrorKind, LoadResult, Located};
 use base64::Engine;
 use glam::{Mat4, Vec3};
 use gltf::accessor::{DataType, Dimensions};
 use gltf::buffer::Source;
 use gltf::mesh::Mode;
+use rt_core::Mesh;
 use std::borrow::Cow;
 use std::path::Path;
 

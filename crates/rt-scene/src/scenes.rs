@@ -1,8 +1,8 @@
 //! Procedural scenes built into the library, so that tests and `cargo xtask compare` need no files.
 
-use crate::raygen::Camera;
-use crate::{Mesh, Rng};
+use crate::Camera;
 use glam::Vec3;
+use rt_core::{Aabb, Mesh, Rng};
 
 /// A built-in scene: its name (what `--scene` takes), a one-line description, and how it is
 /// made at any size.
@@ -24,7 +24,7 @@ pub struct BuiltinScene {
 impl BuiltinScene {
     /// The scene's camera for a `width × height` image: its own viewpoint, or one framing
     /// `bounds`.
-    pub fn camera(&self, bounds: &crate::Aabb, width: u32, height: u32) -> Camera {
+    pub fn camera(&self, bounds: &Aabb, width: u32, height: u32) -> Camera {
         self.camera
             .unwrap_or_else(|| Camera::framing(bounds, width, height))
     }
@@ -50,7 +50,7 @@ pub fn find(spec: &str) -> Option<&'static BuiltinScene> {
 /// (million) suffix, such as `20000`, `500k` or `2.5M`, from 1 to [`MAX_SIZE`]; `None` otherwise.
 ///
 /// ```
-/// use rt_core::scenes::parse_size;
+/// use rt_scene::scenes::parse_size;
 /// assert_eq!(parse_size("2.5M"), Some(2_500_000));
 /// assert_eq!(parse_size("0"), None);
 /// ```
@@ -75,7 +75,7 @@ pub fn parse_size(text: &str) -> Option<usize> {
 /// A one-line message when the name is built in but the size is not a valid count.
 ///
 /// ```
-/// use rt_core::scenes::resolve;
+/// use rt_scene::scenes::resolve;
 /// let (scene, size) = resolve("random-soup:10M").unwrap().unwrap();
 /// assert_eq!((scene.name, size), ("random-soup", 10_000_000));
 /// assert_eq!(resolve("terrain").unwrap().unwrap().1, 100_000);
@@ -145,7 +145,7 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
 
 /// The camera `compare` and the benchmarks use for the scene `spec` (a built-in name or a file):
 /// a built-in scene's own viewpoint when it has one, else one framing `bounds`.
-pub fn camera_for(spec: &str, bounds: &crate::Aabb, width: u32, height: u32) -> Camera {
+pub fn camera_for(spec: &str, bounds: &Aabb, width: u32, height: u32) -> Camera {
     match find(spec) {
         Some(scene) => scene.camera(bounds, width, height),
         None => Camera::framing(bounds, width, height),
@@ -525,7 +525,7 @@ fn soup(count: usize, seed: u64, scale: f32) -> Mesh {
 /// turned about y by a random angle and tilted by up to 0.2 radians, scaled by 0.75 to 1.25 on
 /// each axis independently, and every seventh mirrored (x scaled by a negative factor); drawn
 /// from `seed`. What `cargo xtask compare --instances` traces.
-pub fn instance_field(object: &crate::Aabb, count: usize, seed: u64) -> Vec<glam::Affine3A> {
+pub fn instance_field(object: &Aabb, count: usize, seed: u64) -> Vec<glam::Affine3A> {
     use glam::{Affine3A, Quat};
     let mut rng = Rng::new(seed ^ 0xf1e1d);
     let size = if object.is_empty() {
@@ -565,7 +565,7 @@ pub fn instance_field(object: &crate::Aabb, count: usize, seed: u64) -> Vec<glam
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::Primitive;
+    use rt_core::Primitive;
 
     #[test]
     fn builtins_are_valid() {

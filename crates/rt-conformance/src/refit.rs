@@ -4,11 +4,11 @@
 
 use super::{SCENES, aimed_rays, compare_points, compare_rays, proptest_failure, scene};
 use super::{scene_points, small_triangles};
-use crate::motion::{explode, wave};
-use crate::{Accel, BruteForce, Primitive, Ray, Refit, RefitError, Rng, Triangle};
 use glam::Vec3;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
+use rt_core::{Accel, BruteForce, Primitive, Ray, Refit, RefitError, Rng, Triangle};
+use rt_scene::motion::{explode, wave};
 
 /// `moved`, except that a triangle whose validity the motion changed keeps its old place: a
 /// refit follows primitives that stay valid (or invalid), and the kit tests that, not the

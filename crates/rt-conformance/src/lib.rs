@@ -1,13 +1,13 @@
 //! The conformance kit: checks that an [`Accel`] implementation answers exactly like
 //! [`BruteForce`], on fixed adversarial scenes and on proptest-generated random scenes and rays.
 //!
-//! A structure crate (or a student's) enables the `conformance` feature of `rt-core` in its
-//! dev-dependencies and writes one line per preset in a test file:
+//! A structure crate takes this crate as a dev-dependency (a student's lab, as a dependency) and
+//! writes one line per preset in a test file:
 //!
 //! ```
 //! // In a structure crate this reads, e.g.:
-//! // rt_core::conformance_tests!(sah, rt_bvh::Bvh<rt_core::Triangle>, rt_bvh::BvhParams::sah());
-//! rt_core::conformance_tests!(reference, rt_core::BruteForce<rt_core::Triangle>, ());
+//! // rt_conformance::conformance_tests!(sah, rt_bvh::Bvh<rt_core::Triangle>, rt_bvh::BvhParams::sah());
+//! rt_conformance::conformance_tests!(reference, rt_core::BruteForce<rt_core::Triangle>, ());
 //! ```
 //!
 //! That expands to a module `sah` with one `#[test]` per adversarial scene plus a proptest run,
@@ -27,12 +27,17 @@
 //! a query that does not return within [`STALL_LIMIT`], or that panics, fails the case with the
 //! ray it was on (see [`check_case`]).
 
-use crate::trace::{Event, Outcome, Trace};
-use crate::{Accel, BruteForce, Counters, Hit, PointHit, Primitive, Ray, Rng, Sphere, Triangle};
 use glam::Vec3;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
+use rt_core::trace::{Event, Outcome, Trace};
+use rt_core::{Accel, BruteForce, Counters, Hit, PointHit, Primitive, Ray, Rng, Sphere, Triangle};
 use std::fmt;
+
+/// Re-exported for [`conformance_tests!`], so the macro's expansion names rt-core's items
+/// without the calling crate depending on rt-core under that name.
+#[doc(hidden)]
+pub use rt_core;
 
 mod instances;
 mod refit;
@@ -215,7 +220,7 @@ impl fmt::Display for PointMismatch {
 
 /// Compares `accel`'s closest-point answers with `reference`'s for every `(point, maximum
 /// distance)`, counted and uncounted. An invalid query (see
-/// [`ClosestPointQuery::new`](crate::ClosestPointQuery::new)) must return at once: nothing
+/// [`ClosestPointQuery::new`](rt_core::ClosestPointQuery::new)) must return at once: nothing
 /// found, no primitive test, at most one node visit.
 ///
 /// # Errors
@@ -676,7 +681,7 @@ pub fn scene(name: &str) -> Scene {
             triangles: lattice_triangles(1, 60),
             rays: lattice_rays(1, 800),
         },
-        _ => panic!("unknown conformance scene `{name}`; see rt_core::conformance::SCENES"),
+        _ => panic!("unknown conformance scene `{name}`; see rt_conformance::SCENES"),
     }
 }
 
@@ -706,7 +711,7 @@ pub fn check_scene_closest<A: Accel<Prim = Triangle> + 'static>(params: &A::Para
 
 /// The triangles as an indexed mesh whose bit-identical vertices are shared: what
 /// [`check_geometry_sources`] builds from.
-pub fn shared_vertex_mesh(tris: &[Triangle]) -> crate::Mesh {
+pub fn shared_vertex_mesh(tris: &[Triangle]) -> rt_core::Mesh {
     let mut index = std::collections::HashMap::new();
     let mut positions = Vec::new();
     let indices = tris
@@ -722,11 +727,11 @@ pub fn shared_vertex_mesh(tris: &[Triangle]) -> crate::Mesh {
             })
         })
         .collect();
-    crate::Mesh::new(positions, indices).expect("every index names a vertex just pushed")
+    rt_core::Mesh::new(positions, indices).expect("every index names a vertex just pushed")
 }
 
-/// Checks that structure `A` built with [`Accel::build_from`] from a [`Mesh`](crate::Mesh) and
-/// from an [`IndexedTriangles`](crate::IndexedTriangles) view answers every ray and point of
+/// Checks that structure `A` built with [`Accel::build_from`] from a [`Mesh`](rt_core::Mesh) and
+/// from an [`IndexedTriangles`](rt_core::IndexedTriangles) view answers every ray and point of
 /// every adversarial scene exactly as when built from the triangle slice (same build stats, same
 /// hits bit for bit), and so like brute force. The first 200 rays and points of each scene are
 /// enough: the sources must give the same structure, which the full scene checks test already.
@@ -1009,8 +1014,8 @@ pub fn check_all<A: Accel<Prim = Triangle> + 'static>(params: &A::Params) {
 ///
 /// ```
 /// // For example, in rt-bvh's tests:
-/// // rt_core::conformance_tests!(median, rt_bvh::Bvh<rt_core::Triangle>, rt_bvh::BvhParams::median());
-/// rt_core::conformance_tests!(reference, rt_core::BruteForce<rt_core::Triangle>, ());
+/// // rt_conformance::conformance_tests!(median, rt_bvh::Bvh<rt_core::Triangle>, rt_bvh::BvhParams::median());
+/// rt_conformance::conformance_tests!(reference, rt_core::BruteForce<rt_core::Triangle>, ());
 /// ```
 #[macro_export]
 macro_rules! conformance_tests {
@@ -1018,17 +1023,17 @@ macro_rules! conformance_tests {
         mod $module {
             #[allow(unused_imports)]
             use super::*;
-            fn params() -> <$accel as $crate::Accel>::Params {
+            fn params() -> <$accel as $crate::rt_core::Accel>::Params {
                 $params
             }
             $crate::conformance_tests!(@scenes check_scene, $accel);
             #[test]
             fn random_scenes() {
-                $crate::conformance::check_random::<$accel>(&params());
+                $crate::check_random::<$accel>(&params());
             }
             #[test]
             fn geometry_sources() {
-                $crate::conformance::check_geometry_sources::<$accel>(&params());
+                $crate::check_geometry_sources::<$accel>(&params());
             }
         }
     };
@@ -1038,7 +1043,7 @@ macro_rules! conformance_tests {
         mod $module {
             #[allow(unused_imports)]
             use super::*;
-            fn params() -> <$accel as $crate::Accel>::Params {
+            fn params() -> <$accel as $crate::rt_core::Accel>::Params {
                 $params
             }
             $crate::conformance_tests!(@scenes check_scene_closest, $accel);
@@ -1055,7 +1060,7 @@ macro_rules! conformance_tests {
         $(
             #[test]
             fn $scene() {
-                $crate::conformance::$check::<$accel>(&params(), stringify!($scene));
+                $crate::$check::<$accel>(&params(), stringify!($scene));
             }
         )*
     };

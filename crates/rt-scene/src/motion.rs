@@ -1,8 +1,8 @@
 //! Built-in animations: triangles moved frame by frame, for refitting against rebuilding
 //! (`cargo xtask animate`) and for the refit kit.
 
-use crate::{Aabb, Primitive, Rng, Triangle};
 use glam::{Quat, Vec3};
+use rt_core::{Aabb, Primitive, Rng, Triangle};
 
 /// The box around the valid triangles and its largest side (1 for an empty or flat-to-a-point
 /// scene), which sets the size of every motion.

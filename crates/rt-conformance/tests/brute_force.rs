@@ -1,14 +1,14 @@
 //! The reference itself: the conformance kit (which also exercises the kit's own plumbing), and
 //! an independent double-precision oracle on every adversarial scene.
 
-use rt_core::conformance::{self, SCENES};
+use rt_conformance::SCENES;
 use rt_core::{Accel, BruteForce, Primitive, Ray, Triangle};
 
-rt_core::conformance_tests!(brute_force, BruteForce<Triangle>, ());
+rt_conformance::conformance_tests!(brute_force, BruteForce<Triangle>, ());
 
 #[test]
 fn spheres() {
-    conformance::check_random_spheres::<BruteForce<rt_core::Sphere>>(&());
+    rt_conformance::check_random_spheres::<BruteForce<rt_core::Sphere>>(&());
 }
 
 /// Möller–Trumbore in f64: (t, min barycentric margin, |det| relative to edge lengths).
@@ -41,7 +41,7 @@ fn oracle(t: &Triangle, r: &Ray) -> Option<(f64, f64, f64)> {
 fn agrees_with_a_double_precision_oracle_where_the_answer_is_clear() {
     let mut clear = 0;
     for name in SCENES {
-        let s = conformance::scene(name);
+        let s = rt_conformance::scene(name);
         let bf = BruteForce::build(&s.triangles, &());
         // The oracle only speaks for rays inside the precondition.
         for r in s.rays.iter().filter(|r| r.is_valid()) {

@@ -2,8 +2,8 @@
 //! program (or back to [`load_mesh`](crate::load_mesh)): positions and triangles only.
 //!
 //! ```
-//! use rt_core::save::{PlyEncoding, ply_bytes};
-//! use rt_core::{SceneFormat, load_mesh_bytes, scenes};
+//! use rt_scene::save::{PlyEncoding, ply_bytes};
+//! use rt_scene::{SceneFormat, load_mesh_bytes, scenes};
 //!
 //! let teapot = scenes::teapot(0.0);
 //! let bytes = ply_bytes(&teapot, PlyEncoding::BinaryBigEndian);
@@ -11,7 +11,7 @@
 //! assert_eq!(back.triangles(), teapot.triangles());
 //! ```
 
-use crate::Mesh;
+use rt_core::Mesh;
 
 /// How a PLY file stores its numbers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -102,6 +102,7 @@ fn gltf_json(mesh: &Mesh, uri: Option<&str>, byte_length: usize) -> String {
     )
 }
 
+#[cfg(feature = "gltf")]
 /// The mesh as a `.gltf` file with its buffer embedded as a base64 data URI.
 pub fn gltf_embedded(mesh: &Mesh) -> String {
     use base64::Engine;

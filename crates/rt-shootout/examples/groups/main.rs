@@ -1,7 +1,7 @@
 //! The shootout with one more structure: what a student's crate puts in `examples/shootout.rs`.
 //!
 //! ```sh
-//! cargo run --release -p rt-shootout --example shootout -- --scene teapot-in-stadium --structures groups,bvh,grid
+//! cargo run --release -p rt-shootout --example groups -- --scene teapot-in-stadium --structures groups,bvh,grid
 //! ```
 //!
 //! Every flag of `cargo xtask compare` works (`--json`, `--rays-file`, `--report DIR`, ...).

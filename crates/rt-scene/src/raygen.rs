@@ -1,150 +1,12 @@
-//! Ray sets for measuring structures: primary (camera), incoherent and shadow rays, and the
-//! rays-file format used to replay them.
+//! The ray sets this project measures structures with: primary rays (a [`Camera`]'s image),
+//! incoherent and shadow rays, points for closest-point queries, and the rays-file format that
+//! replays any of them.
 
-use crate::{Aabb, Hit, Primitive, Ray, Rng};
+use crate::Camera;
 use glam::Vec3;
+use rt_core::{Aabb, Hit, Primitive, Ray, Rng};
 use std::fmt;
 use std::path::Path;
-
-/// A pinhole camera.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Camera {
-    /// Eye position.
-    pub eye: Vec3,
-    /// Point the camera looks at.
-    pub target: Vec3,
-    /// Approximate up direction.
-    pub up: Vec3,
-    /// Vertical field of view in degrees.
-    pub vfov_deg: f32,
-}
-
-impl Camera {
-    /// A camera that looks at the box from the front (+z), slightly from above, with a 40°
-    /// vertical field of view, as close as it can while every corner of the box stays in a
-    /// `width × height` image.
-    pub fn framing(bounds: &Aabb, width: u32, height: u32) -> Self {
-        Self::framing_from(bounds, Vec3::new(0.15, 0.3, 1.0), width, height)
-    }
-
-    /// [`Camera::framing`] from the direction `back` (from the box's centre towards the eye;
-    /// need not be unit length): a field of instances on the ground, say, seen from above.
-    pub fn framing_from(bounds: &Aabb, back: Vec3, width: u32, height: u32) -> Self {
-        let vfov_deg = 40.0f32;
-        let center = bounds.center();
-        let back = back.try_normalize().unwrap_or(Vec3::Z);
-        let forward = -back;
-        let right = forward.cross(Vec3::Y).normalize();
-        let up = right.cross(forward);
-        let tan_v = (0.5 * vfov_deg.to_radians()).tan();
-        let tan_h = tan_v * width as f32 / height.max(1) as f32;
-        // A corner at offset c from the centre is at depth d + c·forward; it is in view when its
-        // sideways offsets are within depth · tan of the half angles.
-        let mut dist = 1e-6f32;
-        for i in 0..8 {
-            let corner = Vec3::new(
-                if i & 1 == 0 {
-                    bounds.min.x
-                } else {
-                    bounds.max.x
-                },
-                if i & 2 == 0 {
-                    bounds.min.y
-                } else {
-                    bounds.max.y
-                },
-                if i & 4 == 0 {
-                    bounds.min.z
-                } else {
-                    bounds.max.z
-                },
-            ) - center;
-            let depth = corner.dot(forward);
-            dist = dist
-                .max(corner.dot(up).abs() / tan_v - depth)
-                .max(corner.dot(right).abs() / tan_h - depth);
-        }
-        // A small margin so the silhouette does not touch the image border.
-        let eye = center + back * dist * 1.05;
-        Self {
-            eye,
-            target: center,
-            up: Vec3::Y,
-            vfov_deg,
-        }
-    }
-
-    /// The camera set up for a `width × height` image: it gives the ray through any point of the
-    /// image plane ([`Raster::ray`]), for renderers that sample pixels one at a time, several
-    /// times, or in tiles.
-    pub fn raster(&self, width: u32, height: u32) -> Raster {
-        let forward = (self.target - self.eye).normalize();
-        let right = forward.cross(self.up).normalize();
-        let up = right.cross(forward);
-        let tan = (0.5 * self.vfov_deg.to_radians()).tan();
-        Raster {
-            eye: self.eye,
-            forward,
-            right,
-            up,
-            tan,
-            aspect: width as f32 / height.max(1) as f32,
-            width: width as f32,
-            height: height as f32,
-        }
-    }
-
-    /// One ray through the centre of each pixel of a `width × height` image, row by row from the
-    /// top left.
-    pub fn primary_rays(&self, width: u32, height: u32) -> Vec<Ray> {
-        let raster = self.raster(width, height);
-        let mut rays = Vec::with_capacity(width as usize * height as usize);
-        for y in 0..height {
-            for x in 0..width {
-                rays.push(raster.ray(x as f32 + 0.5, y as f32 + 0.5));
-            }
-        }
-        rays
-    }
-}
-
-/// A [`Camera`] set up for one image size (see [`Camera::raster`]).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Raster {
-    eye: Vec3,
-    forward: Vec3,
-    right: Vec3,
-    up: Vec3,
-    tan: f32,
-    aspect: f32,
-    width: f32,
-    height: f32,
-}
-
-impl Raster {
-    /// The ray through the point `(x, y)` of the image, in pixels from its top left corner: the
-    /// centre of pixel `(i, j)` is `(i + 0.5, j + 0.5)`, and any other point of the pixel gives
-    /// a sub-pixel sample. The direction is unit length; the interval is `[0, inf]`.
-    ///
-    /// ```
-    /// use rt_core::{Aabb, raygen::Camera, glam::Vec3};
-    /// let camera = Camera::framing(&Aabb::new(Vec3::ZERO, Vec3::ONE), 64, 48);
-    /// let raster = camera.raster(64, 48);
-    /// assert_eq!(raster.ray(3.5, 7.5), camera.primary_rays(64, 48)[7 * 64 + 3]);
-    /// // The top left corner of the image looks up and to the left of its centre.
-    /// let (corner, centre) = (raster.ray(0.0, 0.0), raster.ray(32.0, 24.0));
-    /// assert!(corner.dir().y > centre.dir().y);
-    /// ```
-    #[inline]
-    pub fn ray(&self, x: f32, y: f32) -> Ray {
-        let sx = (2.0 * x / self.width - 1.0) * self.tan * self.aspect;
-        let sy = (1.0 - 2.0 * y / self.height) * self.tan;
-        Ray::new(
-            self.eye,
-            (self.forward + sx * self.right + sy * self.up).normalize(),
-        )
-    }
-}
 
 /// `count` rays with origins uniform in `bounds` and directions uniform on the sphere: the
 /// worst case for coherence, like diffuse bounces.
@@ -161,7 +23,8 @@ pub fn incoherent_rays(bounds: &Aabb, count: usize, seed: u64) -> Vec<Ray> {
 /// point of its box), moved by up to 2% of the box's diagonal in a random direction.
 ///
 /// ```
-/// use rt_core::{Aabb, Primitive, Triangle, glam::Vec3, raygen::query_points};
+/// use rt_core::{Aabb, Primitive, Triangle, glam::Vec3};
+/// use rt_scene::raygen::query_points;
 /// let tris = [Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y)];
 /// let points = query_points(&tris, &tris[0].bounds(), 100, 1);
 /// assert_eq!(points.len(), 100);
@@ -198,7 +61,7 @@ pub fn default_light(bounds: &Aabb) -> Vec3 {
 
 /// Occlusion rays from each primary hit to `light`, over `t` in `[0, 1]` of the way there, each
 /// started at the hit's surface point moved off the surface by its error bound
-/// ([`SurfacePoint::spawn_ray_to`](crate::SurfacePoint::spawn_ray_to)), so that no ray can hit
+/// ([`SurfacePoint::spawn_ray_to`](rt_core::SurfacePoint::spawn_ray_to)), so that no ray can hit
 /// the surface it starts on. `prims` are the primitives the hits index.
 pub fn shadow_rays<P: Primitive>(
     primary: &[Ray],
@@ -390,16 +253,5 @@ mod tests {
         assert_eq!(parse_rays("0 0 0 0 0 0\n").unwrap_err().0, 1);
         assert_eq!(parse_rays("0 0 nan 1 0 0\n").unwrap_err().0, 1);
         assert_eq!(parse_rays("0 0 0 1 0 0 2 1\n").unwrap_err().0, 1);
-    }
-
-    #[test]
-    fn primary_rays_cover_the_image() {
-        let b = Aabb::new(Vec3::ZERO, Vec3::ONE);
-        let cam = Camera::framing(&b, 8, 6);
-        let rays = cam.primary_rays(8, 6);
-        assert_eq!(rays.len(), 48);
-        // The centre pixels look at (nearly) the box centre.
-        let to_center = (b.center() - cam.eye).normalize();
-        assert!(rays[3 * 8 + 4].dir().dot(to_center) > 0.99);
     }
 }

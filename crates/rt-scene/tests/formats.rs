@@ -1,10 +1,12 @@
 //! PLY and glTF loading: round trips through every encoding and layout, the features real files
 //! use (n-gons, extra properties and elements, node transforms, strips and fans), and broken
 //! files, each of which must give one clear error naming where it is.
+#![cfg(all(feature = "ply", feature = "gltf"))]
 
+use rt_core::Mesh;
 use rt_core::glam::{Mat4, Quat, Vec3};
-use rt_core::save::{PlyEncoding, glb_bytes, gltf_embedded, gltf_external, ply_bytes};
-use rt_core::{LoadError, LoadErrorKind, Mesh, SceneFormat, load_mesh, load_mesh_bytes, scenes};
+use rt_scene::save::{PlyEncoding, glb_bytes, gltf_embedded, gltf_external, ply_bytes};
+use rt_scene::{LoadError, LoadErrorKind, SceneFormat, load_mesh, load_mesh_bytes, scenes};
 use std::f32::consts::FRAC_1_SQRT_2;
 
 fn ply(bytes: &[u8]) -> Result<Mesh, LoadError> {
@@ -460,7 +462,7 @@ fn extensions_choose_the_loader() {
 /// panic.
 #[test]
 fn shared_bad_files_are_errors_for_the_other_loaders() {
-    let Some(dir) = rt_core::conformance::shared_meshes_dir() else {
+    let Some(dir) = rt_conformance::shared_meshes_dir() else {
         return;
     };
     let mut read = 0;

@@ -2,7 +2,7 @@
 //! examples: the best build time of a few builds, the counted traversal events, and the best
 //! trace time. (`cargo xtask compare` measures in parallel, with its own cross-checks.)
 
-use crate::{Accel, Counters, Ray};
+use rt_core::{Accel, Counters, Ray};
 use std::time::Instant;
 
 /// A structure built and traced by [`measure`].

@@ -1,10 +1,6 @@
-//! Loading scene files: OBJ, PLY and glTF 2.0, chosen by extension, with one error type.
-//!
-//! Every loader returns a [`Mesh`] or a [`LoadError`] naming the file, and the line (text
-//! formats) or the element (binary formats, such as `face 12` or `mesh 0 primitive 1`) to blame.
-//! None panics, whatever the bytes: the fuzz targets in `fuzz/` feed each of them arbitrary input.
+//! The one error every loader returns, and the located error loaders build before they know
+//! the file's name.
 
-use crate::Mesh;
 use std::fmt;
 use std::path::{Path, PathBuf};
 
@@ -103,88 +99,8 @@ impl fmt::Display for LoadError {
 
 impl std::error::Error for LoadError {}
 
-/// The scene file formats [`load_mesh`] reads.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum SceneFormat {
-    /// Wavefront OBJ text ([`load_obj`](crate::load_obj)).
-    Obj,
-    /// PLY, ASCII or binary.
-    Ply,
-    /// glTF 2.0: a `.gltf` JSON file (buffers external or embedded as data URIs) or a `.glb`.
-    Gltf,
-}
-
-impl SceneFormat {
-    /// The format a file name's extension names (in any case), if any.
-    ///
-    /// ```
-    /// use rt_core::SceneFormat;
-    /// assert_eq!(SceneFormat::from_path("scans/Lucy.PLY"), Some(SceneFormat::Ply));
-    /// assert_eq!(SceneFormat::from_path("car.glb"), Some(SceneFormat::Gltf));
-    /// assert_eq!(SceneFormat::from_path("notes.txt"), None);
-    /// ```
-    pub fn from_path(path: impl AsRef<Path>) -> Option<Self> {
-        let ext = path.as_ref().extension()?.to_str()?.to_ascii_lowercase();
-        match ext.as_str() {
-            "obj" => Some(Self::Obj),
-            "ply" => Some(Self::Ply),
-            "gltf" | "glb" => Some(Self::Gltf),
-            _ => None,
-        }
-    }
-}
-
-/// Loads the triangles of an OBJ, PLY or glTF file, chosen by its extension.
-///
-/// glTF files give the triangles of every mesh primitive (in triangle, strip or fan mode) of the
-/// default scene's nodes, with the nodes' transforms applied; PLY files give their faces.
-///
-/// # Errors
-/// A [`LoadError`] naming the file, and the line or element to blame where there is one, for an
-/// unknown extension, a missing or unreadable file, or any content the format's loader rejects.
-/// Never panics.
-///
-/// ```
-/// let err = rt_core::load_mesh("no/such/model.ply").unwrap_err();
-/// assert!(err.to_string().starts_with("no/such/model.ply: cannot read file"));
-/// let err = rt_core::load_mesh("model.stl").unwrap_err();
-/// assert_eq!(err.kind, rt_core::LoadErrorKind::UnknownFormat);
-/// ```
-pub fn load_mesh(path: impl AsRef<Path>) -> Result<Mesh, LoadError> {
-    let path = path.as_ref();
-    let Some(format) = SceneFormat::from_path(path) else {
-        return Err(Located::none(LoadErrorKind::UnknownFormat).at(path));
-    };
-    match format {
-        SceneFormat::Obj => crate::load_obj(path),
-        SceneFormat::Ply => {
-            let bytes = read(path)?;
-            crate::ply::parse_ply(&bytes).map_err(|e| e.at(path))
-        }
-        SceneFormat::Gltf => {
-            let bytes = read(path)?;
-            let folder = path.parent().unwrap_or(Path::new(""));
-            crate::gltf::parse_gltf(&bytes, Some(folder)).map_err(|e| e.at(path))
-        }
-    }
-}
-
-/// Loads a scene file's bytes from memory; `name` stands for the path in errors.
-///
-/// A glTF file whose buffers are external files cannot be loaded this way (there is no folder to
-/// read them from): that is an [`LoadErrorKind::Unsupported`] error.
-///
-/// # Errors
-/// As [`load_mesh`], except that nothing is read from disk.
-pub fn load_mesh_bytes(name: &str, format: SceneFormat, bytes: &[u8]) -> Result<Mesh, LoadError> {
-    match format {
-        SceneFormat::Obj => crate::load_obj_bytes(name, bytes),
-        SceneFormat::Ply => crate::ply::parse_ply(bytes).map_err(|e| e.at(name)),
-        SceneFormat::Gltf => crate::gltf::parse_gltf(bytes, None).map_err(|e| e.at(name)),
-    }
-}
-
 /// A file's bytes, or the error naming it.
+#[cfg(any(feature = "obj", feature = "ply", feature = "gltf"))]
 pub(crate) fn read(path: &Path) -> Result<Vec<u8>, LoadError> {
     std::fs::read(path).map_err(|e| Located::none(LoadErrorKind::Io(e.to_string())).at(path))
 }
@@ -197,6 +113,7 @@ pub(crate) struct Located {
     kind: LoadErrorKind,
 }
 
+#[cfg(any(feature = "ply", feature = "gltf"))]
 pub(crate) type LoadResult<T> = Result<T, Located>;
 
 impl Located {
@@ -208,6 +125,7 @@ impl Located {
         }
     }
 
+    #[cfg(any(feature = "obj", feature = "ply"))]
     pub(crate) fn line(line: Option<usize>, kind: LoadErrorKind) -> Self {
         Self {
             line,
@@ -216,6 +134,7 @@ impl Located {
         }
     }
 
+    #[cfg(any(feature = "ply", feature = "gltf"))]
     pub(crate) fn element(element: String, kind: LoadErrorKind) -> Self {
         Self {
             line: None,

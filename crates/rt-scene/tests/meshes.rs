@@ -3,8 +3,10 @@
 //! These tests need `../shared/meshes`; without it they print a note and pass locally, and fail
 //! under `CI=true` (see `shared_meshes_dir`).
 
-use rt_core::conformance::shared_meshes_dir;
-use rt_core::{LoadErrorKind, Primitive, load_obj};
+#![cfg(feature = "obj")]
+use rt_conformance::shared_meshes_dir;
+use rt_core::Primitive;
+use rt_scene::{LoadErrorKind, load_obj};
 
 /// Triangles, or the error's line and the name of its kind.
 type Expected = Result<usize, (Option<usize>, &'static str)>;

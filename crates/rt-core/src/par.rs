@@ -1,0 +1,220 @@
+//! The few parallel patterns the builders use, on rayon's threads with the feature `parallel`,
+//! and in order on the calling thread without it.
+//!
+//! Every structure crate has a default-on `parallel` feature that turns on this crate's. A
+//! program that leaves it off (`default-features = false`) compiles no thread pool (rayon and
+//! the five crates under it) and builds single-threaded; targets without threads, such as
+//! `wasm32-unknown-unknown`, build either way.
+//!
+//! Each function returns the same values in the same order whether it runs in parallel or not,
+//! so a structure built with or without the feature, on any number of threads, is the same
+//! structure: the builders' determinism tests compare them byte for byte.
+
+use std::ops::Range;
+
+/// How many threads the parallel functions below may use: rayon's pool size, or 1 without the
+/// `parallel` feature. Builders compare it with 1 to skip the cost of splitting work.
+#[inline]
+pub fn threads() -> usize {
+    #[cfg(feature = "parallel")]
+    {
+        rayon::current_num_threads()
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        1
+    }
+}
+
+/// Runs `a` and `b`, possibly at the same time, and returns both results.
+#[inline]
+pub fn join<RA: Send, RB: Send>(
+    a: impl FnOnce() -> RA + Send,
+    b: impl FnOnce() -> RB + Send,
+) -> (RA, RB) {
+    #[cfg(feature = "parallel")]
+    {
+        rayon::join(a, b)
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        (a(), b())
+    }
+}
+
+/// `f(i)` for every `i` in `range`, in order.
+pub fn map_range<R: Send>(range: Range<usize>, f: impl Fn(usize) -> R + Sync + Send) -> Vec<R> {
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        range.into_par_iter().map(f).collect()
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        range.map(f).collect()
+    }
+}
+
+/// `f(item)` for every item, in order.
+pub fn map_vec<T: Send, R: Send>(items: Vec<T>, f: impl Fn(T) -> R + Sync + Send) -> Vec<R> {
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        items.into_par_iter().map(f).collect()
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        items.into_iter().map(f).collect()
+    }
+}
+
+/// `f(chunk)` for each chunk of `size` items (the last may be shorter), in order.
+pub fn map_chunks<T: Sync, R: Send>(
+    items: &[T],
+    size: usize,
+    f: impl Fn(&[T]) -> R + Sync + Send,
+) -> Vec<R> {
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        items.par_chunks(size).map(f).collect()
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        items.chunks(size).map(f).collect()
+    }
+}
+
+/// `f(chunk)` for each mutable chunk of `size` items (the last may be shorter), in order.
+pub fn map_chunks_mut<T: Send, R: Send>(
+    items: &mut [T],
+    size: usize,
+    f: impl Fn(&mut [T]) -> R + Sync + Send,
+) -> Vec<R> {
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        items.par_chunks_mut(size).map(f).collect()
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        items.chunks_mut(size).map(f).collect()
+    }
+}
+
+/// Folds chunks of `size` items into accumulators made by `init` and combines those with
+/// `reduce` (`init()` for no items). The grouping of chunks into accumulators is not fixed, so
+/// `fold` and `reduce` must give the same answer for any grouping (sums, minima and maxima).
+pub fn fold_chunks<T: Sync, A: Send>(
+    items: &[T],
+    size: usize,
+    init: impl Fn() -> A + Sync + Send,
+    fold: impl Fn(A, &[T]) -> A + Sync + Send,
+    reduce: impl Fn(A, A) -> A + Sync + Send,
+) -> A {
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        let folded = items.par_chunks(size).fold(&init, fold);
+        folded.reduce_with(reduce).unwrap_or_else(init)
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        let _ = reduce;
+        items.chunks(size).fold(init(), fold)
+    }
+}
+
+/// Calls `f` on every item, in parallel pieces of at least `min_len` items.
+pub fn for_each_mut<T: Send>(items: &mut [T], min_len: usize, f: impl Fn(&mut T) + Sync + Send) {
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        items.par_iter_mut().with_min_len(min_len).for_each(f);
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        let _ = min_len;
+        items.iter_mut().for_each(f);
+    }
+}
+
+/// Sorts `items` (unstable: equal items may change places, which for a total order on distinct
+/// keys, as the builders use, changes nothing).
+pub fn sort_unstable<T: Ord + Send>(items: &mut [T]) {
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        items.par_sort_unstable();
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        items.sort_unstable();
+    }
+}
+
+/// Appends `f(i)` for every `i` in `range` to `out`, in order, each written in its place.
+pub fn extend_range<T: Send>(
+    out: &mut Vec<T>,
+    range: Range<usize>,
+    f: impl Fn(usize) -> T + Sync + Send,
+) {
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        out.par_extend(range.into_par_iter().map(f));
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        out.extend(range.map(f));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Every function gives the sequential answer, whichever way this crate was built.
+    #[test]
+    fn answers_as_in_order() {
+        let items: Vec<u64> = (0..10_000).map(|i| (i * 7919) % 10_007).collect();
+        assert_eq!(
+            map_range(3..9, |i| i * i),
+            (3..9).map(|i| i * i).collect::<Vec<_>>()
+        );
+        assert_eq!(map_vec(vec![1, 2, 3], |x| x + 1), vec![2, 3, 4]);
+        let sums = map_chunks(&items, 1000, |c| c.iter().sum::<u64>());
+        assert_eq!(sums.len(), 10);
+        assert_eq!(sums.iter().sum::<u64>(), items.iter().sum::<u64>());
+        let mut copy = items.clone();
+        let lens = map_chunks_mut(&mut copy, 3000, |c| {
+            c.reverse();
+            c.len()
+        });
+        assert_eq!(lens, vec![3000, 3000, 3000, 1000]);
+        assert_eq!(copy[0], items[2999]);
+        let total = fold_chunks(
+            &items,
+            64,
+            || 0u64,
+            |a, c| a + c.iter().sum::<u64>(),
+            |a, b| a + b,
+        );
+        assert_eq!(total, items.iter().sum());
+        assert_eq!(
+            fold_chunks(&[] as &[u64], 64, || 5, |a, _| a, |a, b| a + b),
+            5
+        );
+        let mut doubled = items.clone();
+        for_each_mut(&mut doubled, 16, |x| *x *= 2);
+        assert!(doubled.iter().zip(&items).all(|(d, i)| *d == 2 * i));
+        let mut sorted = items.clone();
+        sort_unstable(&mut sorted);
+        assert!(sorted.windows(2).all(|w| w[0] <= w[1]));
+        let mut out = vec![7];
+        extend_range(&mut out, 0..4, |i| i * 10);
+        assert_eq!(out, vec![7, 0, 10, 20, 30]);
+        assert_eq!(join(|| 1, || "two"), (1, "two"));
+        assert!(threads() >= 1);
+    }
+}

@@ -638,3 +638,8 @@ impl<P: Primitive> Accel for Bvh<P> {
         }
     }
 }
+
+/// The README's example, compiled and run as a doctest so that it stays true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

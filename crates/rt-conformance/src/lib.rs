@@ -1711,3 +1711,8 @@ pub fn shared_meshes_dir() -> Option<std::path::PathBuf> {
     );
     None
 }
+
+/// The README's example, compiled and run as a doctest so that it stays true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

@@ -114,3 +114,8 @@ pub use bytemuck;
 
 #[doc(hidden)]
 pub use pod::PodField as __PodField;
+
+/// The README's example, compiled and run as a doctest so that it stays true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

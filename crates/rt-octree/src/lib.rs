@@ -341,3 +341,8 @@ impl<P: Primitive> Accel for Octree<P> {
         }
     }
 }
+
+/// The README's example, compiled and run as a doctest so that it stays true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

@@ -48,3 +48,8 @@ pub use image::{Image, ImageError, MAX_SIDE, RenderOptions, TILE, encode, render
 pub use scene::{Material, PointLight, RenderScene, builtin_names, scene};
 pub use slice::{Coloring, SliceOptions, SliceSummary, cross_section, slice_svg, view_axes};
 pub use tracer::Tracer;
+
+/// The README's example, compiled and run as a doctest so that it stays true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

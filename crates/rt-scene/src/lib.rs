@@ -64,3 +64,8 @@ pub use error::{LoadError, LoadErrorKind};
 pub use load::{SceneFormat, load_mesh, load_mesh_bytes};
 #[cfg(feature = "obj")]
 pub use obj::{load_obj, load_obj_bytes};
+
+/// The README's example, compiled and run as a doctest so that it stays true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

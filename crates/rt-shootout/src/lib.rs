@@ -186,3 +186,8 @@ pub fn exit_code(outcome: Result<Vec<Report>, String>) -> ExitCode {
         }
     }
 }
+
+/// The README's example, compiled and run as a doctest so that it stays true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

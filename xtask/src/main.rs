@@ -1,7 +1,7 @@
 //! The rt-accel runner, invoked as `cargo xtask <task>` (an alias in `.cargo/config.toml`).
 //!
 //! One module per task, as in rust-analyzer's xtask. Tasks:
-//! - `compare`: the structure shootout, with `--report DIR` a Markdown report with charts: the
+//! - `compare`: the structure shootout, with `--out DIR` a Markdown report with charts: the
 //!   `rt-shootout` library, which other crates call with their own structures added.
 //! - `explain`: one ray's walk through one structure, step by step (see [`explain`]).
 //! - `draw`: a slice through a built structure as SVG (see [`draw`]).
@@ -66,11 +66,11 @@ fn main() -> ExitCode {
             ))
         })
         .mut_subcommand("render", |c| c.after_help(render::after_help()));
-    let matches = command.get_matches();
-    let cli = match Cli::from_arg_matches(&matches) {
-        Ok(cli) => cli,
-        Err(e) => e.exit(),
-    };
+    let matches = command
+        .try_get_matches()
+        .unwrap_or_else(|e| rt_shootout::cli::exit_on_error(e));
+    let cli =
+        Cli::from_arg_matches(&matches).unwrap_or_else(|e| rt_shootout::cli::exit_on_error(e));
     match cli.task {
         Task::Compare(args) => rt_shootout::Shootout::new().main_with(&args),
         Task::Draw(args) => match draw::run(&args) {
@@ -110,7 +110,11 @@ fn main() -> ExitCode {
             }
         },
         Task::Render(args) => match render::run(&args) {
-            Ok(()) => ExitCode::SUCCESS,
+            Ok(true) => ExitCode::SUCCESS,
+            Ok(false) => {
+                eprintln!("error: the rows rendered different pictures");
+                ExitCode::from(1)
+            }
             Err(e) => {
                 eprintln!("error: {e}");
                 ExitCode::from(2)

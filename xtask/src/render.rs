@@ -1,6 +1,7 @@
-//! `cargo xtask render`: a Whitted-style picture of a scene through one structure, or per-pixel
-//! cost heatmaps of several side by side. The renderer is the `rt-render` library; this module
-//! only reads flags, picks the scene and structures, shows progress and writes the PNG.
+//! `cargo xtask render`: a Whitted-style picture of a scene through one structure (or several,
+//! whose pictures must be the same bytes), or per-pixel cost heatmaps of several side by side.
+//! The renderer is the `rt-render` library; this module only reads flags, picks the scene and
+//! structures, shows progress and writes the PNG.
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rt_render::{Metric, RenderOptions, RenderScene};
@@ -17,9 +18,11 @@ pub struct Args {
     /// scene of `compare`, or a scene file (OBJ, PLY, glTF).
     #[arg(long, default_value = "whitted")]
     pub scene: String,
-    /// The structure row to trace with (as `compare` names them, or `brute-force`).
-    #[arg(long, default_value = "bvh")]
-    pub structure: String,
+    /// Comma-separated rows to trace with (as `compare` names them, or `brute-force`)
+    /// [default: bvh; with --heatmap, bvh,kdtree,grid,hgrid,octree]. Several rows render the
+    /// picture through each, and every picture must be the same bytes.
+    #[arg(short, long, value_delimiter = ',')]
+    pub structures: Vec<String>,
     /// Image width in pixels (per panel for heatmaps).
     #[arg(long, default_value_t = 1024)]
     pub width: u32,
@@ -29,23 +32,34 @@ pub struct Args {
     /// Rays along a path, the primary ray included (1: no reflection or refraction).
     #[arg(long, default_value_t = 5)]
     pub depth: u32,
-    /// Worker threads (default: all cores).
-    #[arg(long)]
+    /// Worker threads [default: all cores].
+    #[arg(short = 'j', long)]
     pub threads: Option<usize>,
     /// The PNG to write.
-    #[arg(long, default_value = "render.png")]
+    #[arg(short, long, default_value = "render.png")]
     pub out: PathBuf,
-    /// Instead of a picture, the primary rays' cost per pixel: `visits` (nodes or cells
-    /// entered) or `tests` (primitive tests), one panel per structure on one colour scale.
-    #[arg(long, value_name = "visits|tests")]
-    pub heatmap: Option<String>,
-    /// Structures for `--heatmap`, comma-separated.
-    #[arg(
-        long,
-        value_delimiter = ',',
-        default_value = "bvh,kdtree,grid,hgrid,octree"
-    )]
-    pub structures: Vec<String>,
+    /// Instead of a picture, the primary rays' cost per pixel, one panel per structure on one
+    /// colour scale.
+    #[arg(long, value_enum)]
+    pub heatmap: Option<Heatmap>,
+}
+
+/// What a heatmap shows per pixel.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Heatmap {
+    /// Nodes or cells the pixel's primary ray entered.
+    Visits,
+    /// Primitives it tested.
+    Tests,
+}
+
+impl Heatmap {
+    fn metric(self) -> Metric {
+        match self {
+            Heatmap::Visits => Metric::Visits,
+            Heatmap::Tests => Metric::Tests,
+        }
+    }
 }
 
 /// The text after `--help`: scenes and structures.
@@ -55,12 +69,16 @@ pub fn after_help() -> String {
     s.push_str(", or a scene file (.obj, .ply, .gltf, .glb)\nStructures: ");
     let names: Vec<String> = structures::all().into_iter().map(|e| e.name).collect();
     s.push_str(&names.join(", "));
-    s.push_str(", brute-force\n\nExit status: 0 when the PNG is written, 2 on bad input.");
+    s.push_str(
+        ", brute-force\n\nExit status: 0 when the PNG is written, 1 when the rows' pictures \
+         differ, 2 on bad input.",
+    );
     s
 }
 
-/// Runs the task; the error is one line for `error: ...`.
-pub fn run(args: &Args) -> Result<(), String> {
+/// Runs the task; the error is one line for `error: ...`. Returns whether every row rendered
+/// the same picture.
+pub fn run(args: &Args) -> Result<bool, String> {
     let threads = args
         .threads
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
@@ -81,9 +99,9 @@ pub fn run(args: &Args) -> Result<(), String> {
         .num_threads(threads)
         .build()
         .map_err(|e| format!("cannot start {threads} threads: {e}"))?;
-    pool.install(|| match &args.heatmap {
+    pool.install(|| match args.heatmap {
         None => picture(args, &scene, threads),
-        Some(metric) => heatmaps(args, &scene, metric),
+        Some(heatmap) => heatmaps(args, &scene, heatmap.metric()).map(|()| true),
     })
 }
 
@@ -147,50 +165,80 @@ fn progress_bar(label: &str) -> ProgressBar {
     bar
 }
 
-fn picture(args: &Args, scene: &RenderScene, threads: usize) -> Result<(), String> {
-    let entry = structures::find(&structures::all(), &args.structure)?;
+/// The rows `--structures` names, or the default for the mode.
+fn rows(args: &Args) -> Result<Vec<structures::Entry>, String> {
+    let default: &[&str] = match args.heatmap {
+        None => &[rt_shootout::cli::DEFAULT_ROW],
+        Some(_) => rt_shootout::cli::MAIN_ROWS,
+    };
+    let all = structures::all();
+    rt_shootout::cli::rows_or(&args.structures, default)
+        .iter()
+        .map(|n| structures::find(&all, n))
+        .collect()
+}
+
+/// Renders the picture through every row, writes the first row's, and returns whether the
+/// others rendered the same bytes.
+fn picture(args: &Args, scene: &RenderScene, threads: usize) -> Result<bool, String> {
+    let entries = rows(args)?;
+    // Checked first: a row that cannot render is an error before any work.
+    for entry in &entries {
+        shape_builder(entry)?;
+    }
     let shapes = scene.shapes();
-    let start = Instant::now();
-    let tracer = shape_builder(&entry)?(&shapes);
-    let build = start.elapsed();
     let options = RenderOptions {
         width: args.width,
         height: args.height,
         depth: args.depth,
     };
-    let bar = progress_bar(&format!("render {}", entry.name));
-    let start = Instant::now();
-    let image = rt_render::render(scene, &shapes, tracer.as_ref(), &options, &|done, total| {
-        bar.set_length(total as u64);
-        bar.set_position(done as u64);
-    })
-    .map_err(|e| e.to_string())?;
-    let elapsed = start.elapsed();
-    bar.finish_and_clear();
-    image.save_png(&args.out).map_err(|e| e.to_string())?;
-    println!(
-        "wrote {}: {} {}×{}, depth {}, {} primitives; {} built in {:.0} ms, rendered in {:.2} s on {} threads",
-        args.out.display(),
-        args.scene,
-        args.width,
-        args.height,
-        args.depth,
-        shapes.len(),
-        entry.name,
-        build.as_secs_f64() * 1e3,
-        elapsed.as_secs_f64(),
-        threads
-    );
-    Ok(())
+    let mut first: Option<(String, rt_render::Image)> = None;
+    let mut same = true;
+    for entry in &entries {
+        let start = Instant::now();
+        let tracer = shape_builder(entry)?(&shapes);
+        let build = start.elapsed();
+        let bar = progress_bar(&format!("render {}", entry.name));
+        let start = Instant::now();
+        let image = rt_render::render(scene, &shapes, tracer.as_ref(), &options, &|done, total| {
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        })
+        .map_err(|e| e.to_string())?;
+        let elapsed = start.elapsed();
+        bar.finish_and_clear();
+        let verdict = match &first {
+            None => {
+                image.save_png(&args.out).map_err(|e| e.to_string())?;
+                format!("wrote {}", args.out.display())
+            }
+            Some((name, expected)) if *expected == image => format!("same bytes as {name}"),
+            Some((name, _)) => {
+                same = false;
+                format!("DIFFERENT bytes from {name}")
+            }
+        };
+        println!(
+            "{verdict}: {} {}×{}, depth {}, {} primitives; {} built in {:.0} ms, rendered in {:.2} s on {} threads",
+            args.scene,
+            args.width,
+            args.height,
+            args.depth,
+            shapes.len(),
+            entry.name,
+            build.as_secs_f64() * 1e3,
+            elapsed.as_secs_f64(),
+            threads
+        );
+        if first.is_none() {
+            first = Some((entry.name.clone(), image));
+        }
+    }
+    Ok(same)
 }
 
-fn heatmaps(args: &Args, scene: &RenderScene, metric: &str) -> Result<(), String> {
-    let metric = Metric::parse(metric)?;
-    let entries = args
-        .structures
-        .iter()
-        .map(|n| structures::find(&structures::all(), n))
-        .collect::<Result<Vec<_>, _>>()?;
+fn heatmaps(args: &Args, scene: &RenderScene, metric: Metric) -> Result<(), String> {
+    let entries = rows(args)?;
     if entries.is_empty() {
         return Err("--structures names no structure".into());
     }

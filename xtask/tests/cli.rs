@@ -390,7 +390,7 @@ fn report_writes_markdown_charts_and_heatmaps_for_every_scene() {
         "36",
         "--repeats",
         "1",
-        "--report",
+        "--out",
         dir.to_str().unwrap(),
     ]);
     assert!(out.status.success(), "{out:?}");
@@ -421,7 +421,7 @@ fn report_writes_markdown_charts_and_heatmaps_for_every_scene() {
 
     // An unwritable report directory is a one-line error before any measuring.
     assert_one_line_error(
-        &compare(&["--report", "/proc/no-such-dir/report"]),
+        &compare(&["--out", "/proc/no-such-dir/report"]),
         "cannot create report directory",
     );
 }

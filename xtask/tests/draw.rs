@@ -24,13 +24,13 @@ fn every_structure_draws_its_slice() {
         let o = draw(&[
             "--scene",
             "random-soup",
-            "--structure",
+            "--structures",
             structure,
             "--axis",
             "x",
             "--at",
             "0.4",
-            "--color",
+            "--fill",
             "prims",
             "--out",
             out.to_str().unwrap(),
@@ -58,13 +58,40 @@ fn every_structure_draws_its_slice() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// Several rows each get a file of their own, named after the row.
+#[test]
+fn several_rows_draw_a_file_each() {
+    let dir = std::env::temp_dir().join(format!("rt-accel-draw-rows-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let out = dir.join("slice.svg");
+    let o = draw(&[
+        "--scene",
+        "random-soup",
+        "-s",
+        "kdtree,octree",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{o:?}");
+    for row in ["kdtree", "octree"] {
+        let svg = std::fs::read_to_string(dir.join(format!("slice-{row}.svg"))).unwrap();
+        assert!(svg.contains(&format!("{row} on random-soup: slice z")));
+    }
+    assert!(!out.exists());
+    assert_eq!(String::from_utf8_lossy(&o.stdout).lines().count(), 2);
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn bad_input_is_one_line_and_exit_2() {
-    assert_one_line_error(&draw(&["--axis", "w"]), "unknown axis `w`");
+    assert_one_line_error(&draw(&["--axis", "w"]), "invalid value 'w' for '--axis");
     assert_one_line_error(&draw(&["--at", "1.5"]), "--at 1.5 is outside 0 to 1");
-    assert_one_line_error(&draw(&["--color", "pink"]), "unknown coloring `pink`");
     assert_one_line_error(
-        &draw(&["--structure", "octopus"]),
+        &draw(&["--fill", "pink"]),
+        "invalid value 'pink' for '--fill",
+    );
+    assert_one_line_error(
+        &draw(&["--structures", "octopus"]),
         "unknown structure `octopus`",
     );
     assert_one_line_error(
@@ -77,7 +104,7 @@ fn bad_input_is_one_line_and_exit_2() {
         "/no/such/dir/s.svg: cannot write SVG",
     );
     assert_one_line_error(
-        &draw(&["--structure", "brute-force"]),
+        &draw(&["--structures", "brute-force"]),
         "brute-force does not describe its nodes",
     );
 }

@@ -41,7 +41,7 @@ fn every_structure_explains_the_walk_it_counted() {
         ("octree", &["child node", "box ("]),
     ] {
         let o = explain(&[
-            "--structure",
+            "--structures",
             structure,
             "--scene",
             "teapot-in-stadium",
@@ -77,11 +77,29 @@ fn every_structure_explains_the_walk_it_counted() {
     }
 }
 
+/// Several rows explain the same ray one after another; the default row is the BVH.
+#[test]
+fn several_rows_explain_the_same_ray() {
+    let text = |args: &[&str]| {
+        let o = explain(args);
+        assert!(o.status.success(), "{o:?}");
+        String::from_utf8(o.stdout).unwrap()
+    };
+    let both = text(&["-s", "kdtree,grid", "--scene", "random-soup"]);
+    let kd = both
+        .find("kdtree on random-soup")
+        .expect("the kd-tree's walk");
+    let grid = both.find("grid on random-soup").expect("the grid's walk");
+    assert!(kd < grid, "{both}");
+    assert_eq!(both.matches("\nray: ").count(), 2, "{both}");
+    assert!(text(&["--scene", "random-soup"]).starts_with("bvh on random-soup"));
+}
+
 #[test]
 fn any_hit_and_long_walks_are_explained() {
     let run = |max_steps: &str| {
         let o = explain(&[
-            "--structure",
+            "--structures",
             "grid",
             "--scene",
             "teapot-in-stadium",
@@ -110,7 +128,7 @@ fn any_hit_and_long_walks_are_explained() {
 #[test]
 fn bad_input_gets_one_line() {
     for (args, needle) in [
-        (&["--structure", "nope"][..], "unknown structure"),
+        (&["--structures", "nope"][..], "unknown structure"),
         (&["--scene", "nope"], "no built-in scene"),
         (&["--ray", "1 2 3"], "expected 6 or 8 numbers"),
         (&["--ray", "0 0 0 0 0 0"], "invalid ray"),

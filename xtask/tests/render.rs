@@ -44,7 +44,7 @@ fn renders_a_png_of_the_requested_size() {
         "32",
         "--depth",
         "3",
-        "--structure",
+        "--structures",
         "kdtree",
         "--out",
         out.to_str().unwrap(),
@@ -56,6 +56,37 @@ fn renders_a_png_of_the_requested_size() {
         line.starts_with("wrote ") && line.contains("kdtree"),
         "{line}"
     );
+    std::fs::remove_dir_all(&dir).ok();
+}
+
+/// Several rows render the picture through each (short flags as the guide shows them): every
+/// picture must be the same bytes, and the first row's is written.
+#[test]
+fn several_rows_render_the_same_picture() {
+    let dir = scratch("rows");
+    let out = dir.join("w.png");
+    let o = render(&[
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "--depth",
+        "2",
+        "-s",
+        "bvh,grid,octree",
+        "-j",
+        "2",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{o:?}");
+    assert_eq!(png_size(&out), (32, 24));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let lines: Vec<&str> = text.lines().collect();
+    assert_eq!(lines.len(), 3, "{text}");
+    assert!(lines[0].starts_with("wrote ") && lines[0].contains(" bvh built"));
+    assert!(lines[1].starts_with("same bytes as bvh:") && lines[1].contains(" grid built"));
+    assert!(lines[2].starts_with("same bytes as bvh:") && lines[2].contains(" octree built"));
     std::fs::remove_dir_all(&dir).ok();
 }
 
@@ -97,7 +128,7 @@ fn bad_input_is_one_line_and_exit_2() {
     let out = dir.join("x.png");
     let out = out.to_str().unwrap();
     assert_one_line_error(
-        &render(&["--structure", "octopus", "--out", out]),
+        &render(&["--structures", "octopus", "--out", out]),
         "unknown structure `octopus`",
     );
     assert_one_line_error(
@@ -134,7 +165,7 @@ fn bad_input_is_one_line_and_exit_2() {
     );
     assert_one_line_error(
         &render(&["--heatmap", "colours", "--out", out]),
-        "unknown heatmap metric `colours`",
+        "invalid value 'colours' for '--heatmap",
     );
     assert_one_line_error(
         &render(&[

@@ -23,17 +23,16 @@ pub struct AnimateArgs {
     /// A built-in scene (optionally sized, `teapot:50k`) or a scene file.
     #[arg(long, default_value = "teapot")]
     pub scene: String,
-    /// The animation: `wave` (a wave travels through the mesh, one period over the frames) or
-    /// `explode` (every triangle flies outwards, spinning, to about twice the scene's size).
-    #[arg(long, default_value = "explode")]
-    pub animation: String,
+    /// The animation.
+    #[arg(long, value_enum, default_value_t = AnimationKind::Explode)]
+    pub animation: AnimationKind,
     /// Frames after the first (the first is the scene as loaded, which every row builds on).
-    #[arg(long, default_value_t = 10)]
+    #[arg(long, default_value = "10", value_parser = crate::cli::count)]
     pub frames: usize,
-    /// Comma-separated rows (as `compare` names them). Rows that can refit run twice: refitted
-    /// and rebuilt.
-    #[arg(long, default_value = "bvh,bvh-binary,kdtree,grid,hgrid,octree")]
-    pub structures: String,
+    /// Comma-separated rows (as `compare` names them) [default: bvh,kdtree,grid,hgrid,octree].
+    /// Rows that can refit (`bvh`, `bvh-binary`, ...) run twice: refitted and rebuilt.
+    #[arg(short, long, value_delimiter = ',')]
+    pub structures: Vec<String>,
     /// Primary rays per frame: width.
     #[arg(long, default_value_t = 512)]
     pub width: u32,
@@ -41,17 +40,44 @@ pub struct AnimateArgs {
     #[arg(long, default_value_t = 384)]
     pub height: u32,
     /// Rays per frame whose answers are checked against brute force.
-    #[arg(long, default_value_t = 2000)]
+    #[arg(long, default_value = "2000", value_parser = crate::cli::count)]
     pub check_rays: usize,
     /// Update and trace each frame this many times and keep the fastest.
     #[arg(long, default_value_t = 3)]
     pub repeats: usize,
     /// Threads for building and tracing [default: all cores].
-    #[arg(long)]
+    #[arg(short = 'j', long)]
     pub threads: Option<usize>,
     /// Print one JSON object instead of the tables.
     #[arg(long)]
     pub json: bool,
+}
+
+/// The built-in animations, as `--animation` names them.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum AnimationKind {
+    /// A wave travels through the mesh, one period over the frames.
+    Wave,
+    /// Every triangle flies outwards, spinning, to about twice the scene's size.
+    Explode,
+}
+
+impl AnimationKind {
+    /// The animation itself.
+    pub fn animation(self) -> Animation {
+        match self {
+            AnimationKind::Wave => Animation::Wave,
+            AnimationKind::Explode => Animation::Explode,
+        }
+    }
+
+    /// Its name on the command line and in reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            AnimationKind::Wave => "wave",
+            AnimationKind::Explode => "explode",
+        }
+    }
 }
 
 /// How a row follows the animation.
@@ -132,14 +158,7 @@ pub struct AnimateReport {
 /// A one-line description of a bad flag, a scene that cannot be loaded, or a refit a
 /// structure refused.
 pub fn animate(args: &AnimateArgs, entries: &[Entry]) -> Result<AnimateReport, String> {
-    let animation = Animation::named(&args.animation).ok_or_else(|| {
-        let names: Vec<&str> = Animation::ALL.iter().map(|(n, _)| *n).collect();
-        format!(
-            "--animation {}: expected one of {}",
-            args.animation,
-            names.join(", ")
-        )
-    })?;
+    let animation = args.animation.animation();
     if !(1..=1000).contains(&args.frames) {
         return Err(format!("--frames {}: expected 1 to 1000", args.frames));
     }
@@ -152,9 +171,8 @@ pub fn animate(args: &AnimateArgs, entries: &[Entry]) -> Result<AnimateReport, S
     if !(1..=100).contains(&args.repeats) {
         return Err(format!("--repeats {}: expected 1 to 100", args.repeats));
     }
-    let rows: Vec<Entry> = args
-        .structures
-        .split(',')
+    let rows: Vec<Entry> = crate::cli::rows_or(&args.structures, crate::cli::MAIN_ROWS)
+        .iter()
         .map(|name| structures::find(entries, name.trim()))
         .collect::<Result<_, _>>()?;
     let (_, tris) = crate::compare::load_scene(&args.scene)?;
@@ -211,7 +229,11 @@ pub fn animate(args: &AnimateArgs, entries: &[Entry]) -> Result<AnimateReport, S
                         return Ok(());
                     }
                     s.refit(frame).map_err(|e| {
-                        format!("{} refused frame {f} of {}: {e}", row.name, args.animation)
+                        format!(
+                            "{} refused frame {f} of {}: {e}",
+                            row.name,
+                            args.animation.name()
+                        )
                     })
                 })?;
                 track.push(check(&*s, f, update_ms));
@@ -240,7 +262,7 @@ pub fn animate(args: &AnimateArgs, entries: &[Entry]) -> Result<AnimateReport, S
     }
     Ok(AnimateReport {
         scene: args.scene.clone(),
-        animation: args.animation.clone(),
+        animation: args.animation.name().to_owned(),
         triangles: tris.len(),
         rays: rays.len(),
         checked: checked.len(),

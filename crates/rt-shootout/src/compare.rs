@@ -49,14 +49,13 @@ pub struct Args {
     /// The scene being measured (one of `scenes`, set by `run`).
     #[arg(skip)]
     pub scene: String,
-    /// Also write `DIR/report.md` with SVG charts of every scene's figures and a heatmap strip
-    /// per scene.
-    #[arg(long, value_name = "DIR")]
-    pub report: Option<PathBuf>,
+    /// Also write a report into DIR: `report.md` with SVG charts of every scene's figures and a
+    /// heatmap strip per scene (with `--grade`: `grade.md` and `grade.json`).
+    #[arg(short, long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
     /// Grade this row instead: run the conformance kit on it (every scene passed or failed, the
     /// first failing ray of each), then the shootout against `--structures` (default bvh,
-    /// kdtree, grid), and write `grade.json` and `grade.md` into `--report DIR` (default
-    /// `grade`).
+    /// kdtree, grid), and write `grade.json` and `grade.md` into `--out DIR` (default `grade`).
     #[arg(long, value_name = "ROW")]
     pub grade: Option<String>,
     /// Which query to measure: rays, or closest points (nearest primitive to a point).
@@ -64,7 +63,7 @@ pub struct Args {
     pub query: QueryKind,
     /// Closest-point queries: how many points (half uniform in the scene box grown by a quarter
     /// on every side, half within 2% of its diagonal from the surface).
-    #[arg(long, default_value_t = 100_000)]
+    #[arg(long, default_value = "100k", value_parser = crate::cli::count)]
     pub points: usize,
     /// Closest-point queries: the largest distance searched [default: no limit].
     #[arg(long, value_name = "D")]
@@ -73,7 +72,7 @@ pub struct Args {
     /// scaled unevenly, every seventh mirrored): a two-level scene. Each row's structure is
     /// built once over the mesh and instanced under rt-bvh's `Instances`; brute force visits
     /// every instance. Rays only.
-    #[arg(long, value_name = "N")]
+    #[arg(long, value_name = "N", value_parser = crate::cli::count)]
     pub instances: Option<usize>,
     /// Which rays to trace [default: primary].
     #[arg(long, value_enum)]
@@ -85,12 +84,12 @@ pub struct Args {
     #[arg(long, default_value_t = 768)]
     pub height: u32,
     /// Comma-separated rows to run (listed below); brute force is always the baseline.
-    /// [default: all]
-    #[arg(long, value_delimiter = ',')]
+    /// [default: every row]
+    #[arg(short, long, value_delimiter = ',')]
     pub structures: Vec<String>,
     /// Threads for building and tracing [default: all cores]; structures that build in parallel
     /// use them.
-    #[arg(long)]
+    #[arg(short = 'j', long)]
     pub threads: Option<usize>,
     /// Print one JSON object instead of the table.
     #[arg(long)]
@@ -102,7 +101,7 @@ pub struct Args {
     /// How many rays brute force checks (a random subset; all rays if there are fewer).
     /// [default: 20,000; 1,000 with --instances, where one brute-force ray tests every
     /// triangle of each instance whose box it enters]
-    #[arg(long)]
+    #[arg(long, value_parser = crate::cli::count)]
     pub check_rays: Option<usize>,
     /// Seed for incoherent rays and for the checked subset.
     #[arg(long, default_value_t = 1)]
@@ -208,6 +207,20 @@ impl Report {
     pub fn total_mismatches(&self) -> usize {
         self.rows.iter().map(|r| r.mismatches).sum()
     }
+
+    /// The share of the rays that hit the scene (any-hit rays: that are occluded), from the first
+    /// row that traced them all (brute force traces only the checked ones); `None` for
+    /// closest-point queries or when no row traced. A view where most rays miss times little but
+    /// the call, so the share belongs beside every speed.
+    pub fn hit_share(&self) -> Option<f64> {
+        if self.ray_kind == points::KIND {
+            return None;
+        }
+        self.rows
+            .iter()
+            .find(|row| row.rays_traced == self.rays && row.rays_traced > 0)
+            .map(|row| row.hits as f64 / row.rays_traced as f64)
+    }
 }
 
 /// Runs the comparison of the rows among `entries` that `args` selects (all by default) on each
@@ -223,10 +236,10 @@ pub fn run(args: &Args, entries: &[structures::Entry]) -> Result<Vec<Report>, St
     if threads == 0 {
         return Err("--threads must be at least 1".into());
     }
-    if let Some(dir) = &args.report {
+    if let Some(dir) = &args.out {
         if args.query == QueryKind::ClosestPoint {
             return Err(
-                "--report charts ray queries only; leave it out with --query closest-point".into(),
+                "--out writes a report of ray queries only; leave it out with --query closest-point".into(),
             );
         }
         crate::report::prepare(dir)?;
@@ -263,7 +276,7 @@ pub fn run(args: &Args, entries: &[structures::Entry]) -> Result<Vec<Report>, St
         }
         reports.push(report);
     }
-    if let Some(dir) = &args.report {
+    if let Some(dir) = &args.out {
         let written = pool.install(|| crate::report::write(dir, &reports, args, entries))?;
         if !args.json {
             println!("\nwrote {}", written.display());
@@ -758,12 +771,20 @@ fn to_table(r: &Report) -> String {
             r.scene, r.triangles, r.valid_triangles, r.rays, r.threads, r.checked_rays
         );
     } else {
+        let hits = r
+            .hit_share()
+            .map_or(String::new(), |h| format!(" ({:.1}% hit)", 100.0 * h));
         let _ = writeln!(
             s,
-            "scene {} ({} triangles, {} valid), {} {} rays, {} threads; {} rays checked against brute force",
+            "scene {} ({} triangles, {} valid), {} {} rays{hits}, {} threads; {} rays checked against brute force",
             r.scene, r.triangles, r.valid_triangles, r.rays, r.ray_kind, r.threads, r.checked_rays
         );
     }
+    let _ = writeln!(
+        s,
+        "\nCost and speed: build time, memory kept, and per {unit} the nodes or cells entered and the \
+         primitives tested; speedup over brute force"
+    );
     // The name column fits the longest row name.
     let w = r
         .rows
@@ -806,7 +827,12 @@ fn to_table(r: &Report) -> String {
     // The shape of each structure: what the build produced, independent of the rays.
     let _ = writeln!(
         s,
-        "\n{:<w$} {:>9} {:>5} {:>9} {:>7} {:>10} {:>9} {:>11}  other figures",
+        "\nShape: nodes, depth, leaves and the share empty, primitives per non-empty leaf, \
+         references per primitive, and the tests a mailbox skipped per {unit}"
+    );
+    let _ = writeln!(
+        s,
+        "{:<w$} {:>9} {:>5} {:>9} {:>7} {:>10} {:>9} {:>11}  other figures",
         "structure",
         "nodes",
         "depth",
@@ -847,7 +873,13 @@ fn to_table(r: &Report) -> String {
     if !modelled.is_empty() {
         let _ = writeln!(
             s,
-            "\n{:<w$} {:>14} {:>14} {:>7} {:>14} {:>14} {:>7}",
+            "\nThe SAH's prediction against these {units}: expected visits and tests per ray for \
+             lines spread uniformly over the scene box (scaled by the share that enter it), beside \
+             what the {units} did; ratio = measured / predicted"
+        );
+        let _ = writeln!(
+            s,
+            "{:<w$} {:>14} {:>14} {:>7} {:>14} {:>14} {:>7}",
             "structure",
             "visits (SAH)",
             "visits (rays)",
@@ -944,6 +976,7 @@ fn to_json(r: &Report) -> String {
         "query": if r.ray_kind == points::KIND { "closest-point" } else { "rays" },
         "ray_kind": r.ray_kind,
         "rays": r.rays,
+        "hit_share": r.hit_share(),
         "threads": r.threads,
         "checked_rays": r.checked_rays,
         "results": results,

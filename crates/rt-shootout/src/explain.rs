@@ -7,16 +7,16 @@
 
 use crate::compare;
 use crate::structures::{self, Entry, Query};
-use rt_core::{Aabb, Accel, BruteForce, Hit, Primitive, Ray};
+use rt_core::{Aabb, Accel, BruteForce, Hit, Primitive, Ray, Triangle};
 use rt_scene::raygen::parse_rays;
 use rt_scene::scenes;
 
 /// Flags of `cargo xtask explain`.
 #[derive(clap::Args, Debug, Clone)]
 pub struct ExplainArgs {
-    /// The structure row to explain (as `compare` names them).
-    #[arg(long, default_value = "kdtree")]
-    pub structure: String,
+    /// The rows to explain, each in turn (as `compare` names them) [default: bvh].
+    #[arg(short, long, value_delimiter = ',')]
+    pub structures: Vec<String>,
     /// A built-in scene (as `compare` names them) or a scene file (OBJ, PLY, glTF).
     #[arg(long, default_value = "sphereflake")]
     pub scene: String,
@@ -37,7 +37,7 @@ pub struct ExplainArgs {
     #[arg(long)]
     pub any: bool,
     /// Print at most this many steps (a grid can test hundreds of primitives per ray).
-    #[arg(long, default_value_t = 400)]
+    #[arg(long, default_value = "400", value_parser = crate::cli::count)]
     pub max_steps: usize,
 }
 
@@ -83,20 +83,34 @@ pub fn chosen_ray(args: &ExplainArgs, scene: &str, bounds: &Aabb) -> Result<Ray,
         .ray(x as f32 + 0.5, y as f32 + 0.5))
 }
 
-/// The walk of the ray `args` names through its row on its scene, as text: a header, one line
-/// per step, the answer, the counts, and brute force's answer.
+/// The walk of the ray `args` names through each of its rows on its scene, as text, one row
+/// after another: a header, one line per step, the answer, the counts, and brute force's answer.
 ///
 /// # Errors
 /// A one-line description of an unknown row or scene, an unreadable file, or a bad ray.
 pub fn explain(args: &ExplainArgs, entries: &[Entry]) -> Result<String, String> {
-    let entry = structures::find(entries, &args.structure)?;
+    let rows = crate::cli::rows_or(&args.structures, &[crate::cli::DEFAULT_ROW]);
+    let rows: Vec<Entry> = rows
+        .iter()
+        .map(|name| structures::find(entries, name))
+        .collect::<Result<_, _>>()?;
     let (_, triangles) = compare::load_scene(&args.scene)?;
     let bounds = triangles
         .iter()
         .filter(|t| t.is_valid())
         .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
     let ray = chosen_ray(args, &args.scene, &bounds)?;
-    let built = (entry.build)(&triangles);
+    let walks: Vec<String> = rows
+        .iter()
+        .map(|entry| explain_one(args, entry, &triangles, &ray))
+        .collect();
+    Ok(walks.join("\n"))
+}
+
+/// One row's walk of `ray` (see [`explain`]).
+fn explain_one(args: &ExplainArgs, entry: &Entry, triangles: &[Triangle], ray: &Ray) -> String {
+    let ray = *ray;
+    let built = (entry.build)(triangles);
     let query = if args.any { Query::Any } else { Query::Closest };
     let (answer, trace) = built.trace(&ray, query);
 
@@ -138,7 +152,7 @@ pub fn explain(args: &ExplainArgs, entries: &[Entry]) -> Result<String, String> 
         c.prim_tests,
         c.mailbox_skips
     );
-    let reference = BruteForce::build(&triangles, &());
+    let reference = BruteForce::build(triangles, &());
     let expected = if args.any {
         reference.occluded(&ray).then_some(Hit {
             prim: u32::MAX,
@@ -159,7 +173,7 @@ pub fn explain(args: &ExplainArgs, entries: &[Entry]) -> Result<String, String> 
     } else {
         format!("brute force DISAGREES: {}\n", describe(expected, args.any))
     };
-    Ok(out)
+    out
 }
 
 fn describe(hit: Option<Hit>, any: bool) -> String {

@@ -144,7 +144,7 @@ pub fn kit(entry: &Entry) -> Vec<Check> {
 
 /// Grades the row `args.grade` of `entries`: the kit, then the shootout of that row against the
 /// rows `args.structures` names (bvh, kdtree and grid by default) on `args`' scenes. Writes
-/// `grade.json` and `grade.md` into `--report DIR` (default `grade`) and returns the Markdown's
+/// `grade.json` and `grade.md` into `--out DIR` (default `grade`) and returns the Markdown's
 /// path.
 ///
 /// # Errors
@@ -152,10 +152,7 @@ pub fn kit(entry: &Entry) -> Vec<Check> {
 pub fn run(args: &Args, entries: &[Entry]) -> Result<PathBuf, String> {
     let name = args.grade.clone().unwrap_or_default();
     let entry = structures::find(entries, &name)?;
-    let dir = args
-        .report
-        .clone()
-        .unwrap_or_else(|| PathBuf::from("grade"));
+    let dir = args.out.clone().unwrap_or_else(|| PathBuf::from("grade"));
     crate::report::prepare(&dir)?;
     let checks = kit(&entry);
     let mut rows = vec![name.clone()];
@@ -166,7 +163,7 @@ pub fn run(args: &Args, entries: &[Entry]) -> Result<PathBuf, String> {
     }
     let shootout_args = Args {
         structures: rows,
-        report: None,
+        out: None,
         grade: None,
         ..args.clone()
     };

@@ -4,7 +4,7 @@
 //! checks every answer (against brute force on a random subset, against each other on all rays,
 //! and against brute force again wherever they disagree), and reports build time, memory, shape,
 //! node visits and primitive tests per ray, the surface area heuristic's prediction of those,
-//! and speed: as a table, JSON (`--json`), or a Markdown report with charts (`--report DIR`).
+//! and speed: as a table, JSON (`--json`), or a Markdown report with charts (`--out DIR`).
 //!
 //! A structure from another crate joins the built-in rows in a few lines, with every flag of
 //! `compare`. In that crate's `examples/shootout.rs`:
@@ -20,10 +20,11 @@
 //! ```
 //!
 //! and then `cargo run --release --example shootout -- --scene teapot-in-stadium`, or
-//! `--structures mine,grid,bvh --json`, or `--report out`, as with `cargo xtask compare`.
+//! `--structures mine,grid,bvh --json`, or `--out report`, as with `cargo xtask compare`.
 //! The crate needs `rt-core` and `rt-shootout` as dependencies (see the workspace README).
 
 pub mod animate;
+pub mod cli;
 pub mod compare;
 pub mod explain;
 pub mod fuzz;
@@ -131,10 +132,10 @@ impl Shootout {
     /// answer agrees, 1 on any mismatch, 2 on bad input (after one `error:` line).
     pub fn main(&self) -> ExitCode {
         let command = Cli::command().after_help(compare::after_help(&self.entries));
-        let cli = match Cli::from_arg_matches(&command.get_matches()) {
-            Ok(cli) => cli,
-            Err(e) => e.exit(),
-        };
+        let matches = command
+            .try_get_matches()
+            .unwrap_or_else(|e| cli::exit_on_error(e));
+        let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| cli::exit_on_error(e));
         self.main_with(&cli.args)
     }
 

@@ -1,4 +1,4 @@
-//! `cargo xtask compare --report DIR`: the shootout as a Markdown report with SVG charts (speed,
+//! `cargo xtask compare --out DIR`: the shootout as a Markdown report with SVG charts (speed,
 //! cost per ray, memory, build time, and the SAH's prediction against the measured cost) and a
 //! heatmap strip of primitive tests per scene.
 

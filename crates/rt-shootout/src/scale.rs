@@ -1,6 +1,8 @@
 //! The scale ladder: each structure built and traced on one built-in scene at sizes from
 //! thousands to millions of triangles, so that an `O(N log N)` build, a logarithmic trace and a
-//! super-linear one can be told apart.
+//! super-linear one can be told apart. A scene file gives a ladder of its own: the first `n` of
+//! its triangles, in the file's order (a growing part of the surface, at the file's density), up
+//! to all of them.
 //!
 //! Per size and row: build time per triangle, trace time per primary ray, the structure's bytes
 //! per triangle ([`Accel::memory_bytes`](rt_core::Accel::memory_bytes)), and the heap peak of the
@@ -12,7 +14,7 @@
 
 use crate::memory;
 use crate::structures::{self, Entry, Query};
-use rt_core::{Hit, Triangle};
+use rt_core::{Aabb, Hit, Primitive, Triangle};
 use rt_scene::scenes;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -22,18 +24,20 @@ use std::time::Instant;
 #[derive(clap::Args, Debug, Clone)]
 pub struct ScaleArgs {
     /// The built-in scene kind the ladder sizes (`terrain`, `random-soup`, `sphereflake`,
-    /// `teapot-in-stadium`).
+    /// `teapot-in-stadium`, ...), or a scene file (OBJ, PLY, glTF), whose first triangles make
+    /// the smaller sizes.
     #[arg(long, default_value = "terrain")]
     pub scene: String,
-    /// Comma-separated rows (as `compare` names them).
-    #[arg(long, default_value = "bvh,kdtree,grid,hgrid,octree")]
-    pub structures: String,
+    /// Comma-separated rows (as `compare` names them) [default: bvh,kdtree,grid,hgrid,octree].
+    #[arg(short, long, value_delimiter = ',')]
+    pub structures: Vec<String>,
     /// The smallest size, in triangles (`10k`, `1M`, ...).
-    #[arg(long, default_value = "10k")]
-    pub min: String,
-    /// The largest size: the ladder goes up by 1, 3, 10, 30, ... times a power of ten to here.
-    #[arg(long, default_value = "1M")]
-    pub max: String,
+    #[arg(long, default_value = "10k", value_parser = crate::cli::count)]
+    pub min: usize,
+    /// The largest size: the ladder goes up by 1, 3, 10, 30, ... times a power of ten to here
+    /// (for a file, at most its triangle count).
+    #[arg(long, default_value = "1M", value_parser = crate::cli::count)]
+    pub max: usize,
     /// Primary rays per size: width.
     #[arg(long, default_value_t = 256)]
     pub width: u32,
@@ -41,11 +45,12 @@ pub struct ScaleArgs {
     #[arg(long, default_value_t = 192)]
     pub height: u32,
     /// Threads for building and tracing [default: all cores].
-    #[arg(long)]
+    #[arg(short = 'j', long)]
     pub threads: Option<usize>,
-    /// Also write the four curves (build, trace, bytes, peak memory against size) as SVG here.
-    #[arg(long)]
-    pub svg: Option<PathBuf>,
+    /// Also write the four curves (build, trace, bytes, peak memory against size) as an SVG
+    /// chart to this file.
+    #[arg(short, long, value_name = "FILE")]
+    pub out: Option<PathBuf>,
     /// Print one JSON object instead of the table.
     #[arg(long)]
     pub json: bool,
@@ -116,11 +121,58 @@ pub fn ladder(min: usize, max: usize) -> Vec<usize> {
     out
 }
 
-/// A size flag's value: a triangle count such as `10k` or `3M`.
-fn size(flag: &str, value: &str) -> Result<usize, String> {
-    scenes::parse_size(value).ok_or_else(|| {
-        format!("{flag} {value}: expected a triangle count from 1 to 100M, such as 10k or 3M")
-    })
+/// What the ladder sizes: a built-in scene kind, made at each size, or a file's triangles, whose
+/// first `n` make size `n`.
+enum Source {
+    Builtin(&'static scenes::BuiltinScene),
+    File(Vec<Triangle>),
+}
+
+impl Source {
+    fn new(spec: &str) -> Result<Self, String> {
+        if let Some(kind) = scenes::find(spec) {
+            if spec.contains(':') {
+                return Err(format!(
+                    "--scene {spec}: scale sizes the scene itself; give the kind alone                      (`{}`) and the sizes with --min and --max",
+                    kind.name
+                ));
+            }
+            return Ok(Self::Builtin(kind));
+        }
+        let (_, triangles) = crate::compare::load_scene(spec)?;
+        Ok(Self::File(triangles))
+    }
+
+    /// The largest size there is: any, or the file's triangle count.
+    fn largest(&self) -> usize {
+        match self {
+            Self::Builtin(_) => usize::MAX,
+            Self::File(t) => t.len(),
+        }
+    }
+
+    /// The scene at size `n`, and the camera its primary rays come from.
+    fn at(&self, n: usize, width: u32, height: u32) -> (Vec<Triangle>, rt_scene::Camera) {
+        let (tris, bounds, kind) = match self {
+            Self::Builtin(kind) => {
+                let mesh = kind.make(n);
+                (mesh.triangles(), mesh.bounds(), Some(kind))
+            }
+            Self::File(all) => {
+                let tris = all[..n.min(all.len())].to_vec();
+                let bounds = tris
+                    .iter()
+                    .filter(|t| t.is_valid())
+                    .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+                (tris, bounds, None)
+            }
+        };
+        let camera = match kind {
+            Some(kind) => kind.camera(&bounds, width, height),
+            None => rt_scene::Camera::framing(&bounds, width, height),
+        };
+        (tris, camera)
+    }
 }
 
 /// How many rays of each size are checked against the first row.
@@ -131,19 +183,19 @@ const CHECKED: usize = 2000;
 /// # Errors
 /// A one-line description of a bad flag (unknown scene or row, malformed size).
 pub fn scale(args: &ScaleArgs, entries: &[Entry]) -> Result<ScaleReport, String> {
-    let kind = scenes::find(&args.scene)
-        .filter(|_| !args.scene.contains(':'))
-        .ok_or_else(|| {
-            let names: Vec<&str> = scenes::BUILTIN_SCENES.iter().map(|s| s.name).collect();
-            format!(
-                "--scene {}: scale sizes a built-in scene kind, one of {}",
-                args.scene,
-                names.join(", ")
-            )
-        })?;
-    let (min, max) = (size("--min", &args.min)?, size("--max", &args.max)?);
+    let source = Source::new(&args.scene)?;
+    let (min, max) = (args.min, args.max.min(source.largest()));
+    if min == 0 || max == 0 {
+        return Err("--min and --max must be at least 1 triangle".into());
+    }
     if min > max {
-        return Err(format!("--min {} is above --max {}", args.min, args.max));
+        return Err(match source {
+            Source::File(_) => format!(
+                "--min {} is above the {max} triangles of {}",
+                args.min, args.scene
+            ),
+            Source::Builtin(_) => format!("--min {} is above --max {}", args.min, args.max),
+        });
     }
     if args.width == 0 || args.height == 0 || args.width > 1 << 13 || args.height > 1 << 13 {
         return Err(format!(
@@ -151,9 +203,8 @@ pub fn scale(args: &ScaleArgs, entries: &[Entry]) -> Result<ScaleReport, String>
             args.width, args.height
         ));
     }
-    let rows: Vec<Entry> = args
-        .structures
-        .split(',')
+    let rows: Vec<Entry> = crate::cli::rows_or(&args.structures, crate::cli::MAIN_ROWS)
+        .iter()
         .map(|name| structures::find(entries, name.trim()))
         .collect::<Result<_, _>>()?;
     let mut pool = rayon::ThreadPoolBuilder::new();
@@ -163,13 +214,8 @@ pub fn scale(args: &ScaleArgs, entries: &[Entry]) -> Result<ScaleReport, String>
     let pool = pool.build().map_err(|e| format!("thread pool: {e}"))?;
     let mut points = Vec::new();
     for n in ladder(min, max) {
-        let mesh = kind.make(n);
-        let tris = mesh.triangles();
-        let bounds = mesh.bounds();
-        drop(mesh);
-        let rays = kind
-            .camera(&bounds, args.width, args.height)
-            .primary_rays(args.width, args.height);
+        let (tris, camera) = source.at(n, args.width, args.height);
+        let rays = camera.primary_rays(args.width, args.height);
         let sample: Vec<_> = rays
             .iter()
             .step_by((rays.len() / CHECKED).max(1))
@@ -210,7 +256,10 @@ pub fn scale(args: &ScaleArgs, entries: &[Entry]) -> Result<ScaleReport, String>
         }
     }
     Ok(ScaleReport {
-        scene: kind.name.to_string(),
+        scene: match source {
+            Source::Builtin(kind) => kind.name.to_string(),
+            Source::File(_) => args.scene.clone(),
+        },
         threads: pool.current_num_threads(),
         rays: (args.width * args.height) as usize,
         points,

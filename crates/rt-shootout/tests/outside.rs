@@ -103,7 +103,7 @@ fn grading_writes_every_check_and_the_first_failing_ray() {
             "24",
             "--repeats",
             "1",
-            "--report",
+            "--out",
             dir.to_str().unwrap(),
         ])
         .unwrap()

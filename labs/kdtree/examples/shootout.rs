@@ -1,6 +1,6 @@
 //! Your kd-tree traversal in the shootout, next to the built-in structures:
 //! `cargo run --release --example shootout -- --scene teapot-in-stadium --structures lab-kdtree,kdtree,kdtree-restart,bvh-binary`
-//! takes every flag of `cargo xtask compare` (`--json`, `--report DIR`, `--grade lab-kdtree`, ...).
+//! takes every flag of `cargo xtask compare` (`--json`, `--out DIR`, `--grade lab-kdtree`, ...).
 
 fn main() -> std::process::ExitCode {
     rt_shootout::Shootout::new()

@@ -23,3 +23,16 @@ pub fn xtask(task: &str, args: &[&str]) -> Output {
         .output()
         .expect("xtask runs")
 }
+
+/// Runs `cargo xtask TASK ARGS...`, which must succeed, and parses the one JSON object it
+/// prints (the caller passes `--json`).
+#[allow(dead_code)] // Not every test file that includes this module runs JSON tasks.
+pub fn json(task: &str, args: &[&str]) -> serde_json::Value {
+    let out = xtask(task, args);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("one JSON object")
+}

@@ -4,7 +4,7 @@
 //! cargo run --release -p rt-shootout --example groups -- --scene teapot-in-stadium --structures groups,bvh,grid
 //! ```
 //!
-//! Every flag of `cargo xtask compare` works (`--json`, `--rays-file`, `--report DIR`, ...).
+//! Every flag of `cargo xtask compare` works (`--json`, `--rays-file`, `--out DIR`, ...).
 
 mod groups;
 

@@ -11,11 +11,14 @@
 //!   [`animate`]).
 //! - `scale`: the size ladder, build and trace cost and memory from thousands to millions of
 //!   triangles (see [`scale`]).
+//! - `results`: every measurement the documentation quotes, written as one page (see
+//!   [`results`]).
 
 mod animate;
 mod draw;
 mod explain;
 mod render;
+mod results;
 mod scale;
 
 /// Counts heap bytes in use and their peak, for `scale`'s peak build memory.
@@ -56,6 +59,9 @@ enum Task {
     /// update time, trace time, their sum and the SAH cost, every frame checked against brute
     /// force.
     Animate(animate::Args),
+    /// Measure everything the documentation quotes and write the results page (by default
+    /// docs/results.md), stamped with the date, the commit and the CPU.
+    Results(results::Args),
 }
 
 fn main() -> ExitCode {
@@ -105,6 +111,20 @@ fn main() -> ExitCode {
                 ExitCode::from(1)
             }
             Err(e) => {
+                eprintln!("error: {e}");
+                ExitCode::from(2)
+            }
+        },
+        Task::Results(args) => match results::run(&args) {
+            Ok(path) => {
+                println!("wrote {}", path.display());
+                ExitCode::SUCCESS
+            }
+            Err(results::Failure::Run(e)) => {
+                eprintln!("error: {e}");
+                ExitCode::from(1)
+            }
+            Err(results::Failure::BadInput(e)) => {
                 eprintln!("error: {e}");
                 ExitCode::from(2)
             }

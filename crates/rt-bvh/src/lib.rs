@@ -28,19 +28,15 @@
 //! - [`WideNode`]: 256 bytes, four cache lines, aligned to one — the children's boxes as six
 //!   rows of eight floats (minimum x, y, z, maximum x, y, z: 192), eight 32-bit [`ChildRef`]s
 //!   (32: a node index, or a leaf of up to eight items with its first item), and 32 bytes of
-//!   padding (without it, 224-byte nodes traced primary and shadow rays 2-3% slower).
+//!   padding (224-byte nodes, which straddle cache lines, traced slower when measured).
 //! - [`TriPack`]: 160 bytes for four triangles, 40 per triangle — nine rows of four floats
 //!   (`v0`, `v1`, `v2` for the watertight test; `v0`, `e1`, `e2` for Möller–Trumbore) and four
 //!   32-bit input indices. Unused lanes hold NaN.
-//! - On the Stanford bunny the wide tree takes 3.9 MiB (59 bytes per triangle: 4,359 nodes and
-//!   18,535 packs), the binary tree 5.0 MiB (75 bytes per triangle, counting its copy of the
-//!   triangles and their indices).
 //! - [`Accel::build_from`] reads a [`Mesh`](rt_core::Mesh) or an
 //!   [`IndexedTriangles`](rt_core::IndexedTriangles) view through its indices straight into the
-//!   packs, so no triangle list exists: on the bunny the build peaks at 9.9 MiB instead of 12.3
-//!   through `mesh.triangles()`, in the same time (`cargo run --release -p rt-benches --example
-//!   sources`). Packs gathering their vertices through the mesh's indices instead would save
-//!   0.5 MiB and trace 0.58× as fast (primary rays, measured there with primitives that do).
+//!   packs, so no triangle list exists during the build. Packs that gathered their vertices
+//!   through the mesh's indices instead would keep a little less memory but lose the side-by-side
+//!   vertices the SIMD test loads, so the tree keeps its own copy.
 //!
 //! # Cost model
 //! - **Build**: O(N log N). Each set of primitives is binned once (SAH) and partitioned once,
@@ -48,9 +44,10 @@
 //!   just fits a balanced tree are split by count, so the depth never exceeds [`MAX_DEPTH`] and
 //!   degenerate input costs O(N · MAX_DEPTH) at worst. Scratch memory: 32 bytes per primitive,
 //!   plus, in the parallel build, the subtrees built as tasks until they are appended (up to a
-//!   second copy of the tree); measured below, a build peaks at about 160 bytes per triangle,
-//!   the finished tree included. Large inputs build on rayon's threads; the tree is the same,
-//!   byte for byte, on any number of threads.
+//!   second copy of the tree), so a build's scratch stays below the finished tree plus its
+//!   input (`cargo xtask scale` measures it). With the `parallel` feature (default) large inputs
+//!   build on rayon's threads; the tree is the same, byte for byte, on any number of threads
+//!   and without the feature.
 //! - **Memory**: see the layouts above.
 //! - **Traversal step** (wide): a node visit is one 8-lane slab test (six loads, subtractions,
 //!   multiplications and min/max, one compare and a mask: 256-bit operations with AVX2, two
@@ -91,16 +88,16 @@
 //!   1). In the wide tree a leaf is priced by its packs of four, as Embree does.
 //! - `max_leaf_size`: the most primitives a leaf may hold (8; at most 32 triangles, or 8 other
 //!   primitives, in the wide tree).
-//! - `parallel` (true): build (and refit) large inputs on rayon's threads.
+//! - `parallel` (true): build (and refit) large inputs on rayon's threads (with the crate's
+//!   `parallel` feature; without it every build runs on the calling thread).
 //! - `sort_children`, `any_hit_path` (true): switch off the nearest-first order and the any-hit
-//!   path, only to measure what they gain (see below).
+//!   path, only to measure what they gain (`cargo run --release -p rt-bvh --example steps`).
 //!
 //! # Closest points
 //! [`Accel::closest_point`] walks the same tree nearest box first
 //! (`nearest.rs`): the children a query's ball reaches are sorted by their distance from the point,
 //! the nearest visited next and the others pushed, and a popped box is skipped once the best
-//! distance so far is smaller. Triangle packs are read back lane by lane. On the bunny, 100,000
-//! points (`cargo xtask compare --query closest-point --scene ../shared/meshes/stanford-bunny.obj --structures bvh,kdtree,grid,hgrid,octree`): 33.7 visits and 84.5 triangle tests per query, 308 times brute force's speed.
+//! distance so far is smaller. Triangle packs are read back lane by lane.
 //!
 //! # Instances
 //! [`Instances`] is the top level of a two-level scene: a binary SAH BVH (one instance per leaf,
@@ -111,9 +108,8 @@
 //! [`InstanceTransform::ray_pad`](rt_core::InstanceTransform::ray_pad), so the rounding of that
 //! transform never culls an instance holding a hit, and the answers equal
 //! [`LinearInstances`](rt_core::LinearInstances)'s exactly. Per instance: 192 bytes for the
-//! record and about 97 for the top level. On 1,000 bunnies (`cargo xtask compare --scene
-//! ../shared/meshes/stanford-bunny.obj --instances 1000`), against one bunny: 1.07× the memory,
-//! 1.05× to 1.12× the build time (two runs), 0 mismatches for every bottom-level structure.
+//! record (both affine maps, the world box, the id, the shared structure's pointer) and the top
+//! level's nodes.
 //!
 //! # Refitting
 //! When the primitives move, [`Refit::refit`](rt_core::Refit::refit) keeps the tree and
@@ -122,56 +118,16 @@
 //! count, and each stored one still valid and still a triangle; see
 //! [`RefitError`](rt_core::RefitError)) and otherwise leaves the tree as it was. The tree keeps
 //! the shape the build chose for the first positions; [`Bvh::sah_cost`] (`O(nodes)`) against
-//! a fresh build's, or against [`Bvh::built_sah_cost`], measures how far it has drifted. On the
-//! bunny bent by a wave (`cargo xtask animate --scene ../shared/meshes/stanford-bunny.obj
-//! --animation wave`, 2 threads) a refit took 0.67 to 0.78 ms against 10.5 to 12.5 ms for a
-//! rebuild, and its SAH cost stayed within 1.11× of a rebuilt tree's; on the exploding teapot
-//! (`cargo xtask animate`) the ratio grew from 2.2 after one frame to 278 after ten, and from
-//! the third frame on a rebuild and its trace were cheaper than a refit and its trace.
+//! a fresh build's, or against [`Bvh::built_sah_cost`], measures how far it has drifted: a tree
+//! bent by a wave stays close to a rebuilt one, while an explosion drives neighbours apart until
+//! a rebuild and its trace are cheaper than a refit and its trace (`cargo xtask animate`).
 //!
-//! # Measured
-//! Against Embree 3.13 (build quality medium, its default; scene flags default), single-threaded
-//! traces of the same triangles and rays (1024×768 per set), one run of `cargo bench -p
-//! rt-benches --features embree --bench peers` (medians of 5 interleaved passes; speed ÷
-//! Embree's):
-//!
-//! | scene | primary | incoherent | shadow | build, 1 thread (Embree's time ÷ ours) |
-//! | --- | ---: | ---: | ---: | ---: |
-//! | bunny | 1.28 | 0.91 | 1.07 | 1.06 |
-//! | teapot | 1.46 | 0.91 | 1.10 | 1.08 |
-//! | sphereflake | 1.41 | 0.89 | 1.03 | 1.04 |
-//! | teapot in a stadium | 1.40 | 0.91 | 1.24 | 1.01 |
-//! | **geometric mean** | **1.39** | **0.90** | **1.11** | 1.04 |
-//!
-//! In the same run `Bvh<MtTriangle>` (Möller–Trumbore packs) reached 1.47 / 0.99 / 1.17, and
-//! the binary tree 0.74 / 0.39 / 0.44. Builds on 2 threads were 1.85× faster than on one on the
-//! bunny (10.9 against 20.2 ms; Embree 2.03×) and 1.77× on the sphereflake (Embree 1.98×).
-//!
-//! What each step from the binary tree gained, single-threaded, speed ÷ the binary tree's,
-//! `cargo run --release -p rt-bvh --example steps` (medians of 3 interleaved passes; each row
-//! adds one step to the row above; the example prints the teapot and the teapot in a stadium
-//! too):
-//!
-//! | step | bunny: primary / incoherent / shadow | sphereflake: primary / incoherent / shadow |
-//! | --- | --- | --- |
-//! | binary (12.5 / 2.43 / 2.77 Mrays/s; 17.0 / 3.67 / 4.95) | 1 / 1 / 1 | 1 / 1 / 1 |
-//! | wide nodes, one 8-lane slab test per node; triangles one at a time (the scalar reference) | 0.41 / 0.97 / 0.72 | 0.45 / 0.81 / 0.63 |
-//! | + SoA packs, four triangles per test (plain arrays) | 0.71 / 1.59 / 1.30 | 0.73 / 1.28 / 1.05 |
-//! | + SSE2 intrinsics | 1.07 / 2.20 / 2.11 | 1.09 / 1.75 / 1.67 |
-//! | + AVX2 intrinsics (runtime dispatch) | 1.22 / 2.40 / 2.41 | 1.21 / 1.88 / 1.85 |
-//! | + nearest-first order of the children | 1.86 / 2.40 / 2.30 | 1.69 / 2.12 / 1.90 |
-//! | + any-hit path: no sorting, first hit ends (default) | 1.82 / 2.54 / 3.13 | 1.70 / 2.15 / 2.42 |
-//!
-//! Wide nodes alone do not pay: the wins come with the SIMD leaves and the ordering. Counted in
-//! `cargo xtask compare --scene ../shared/meshes/stanford-bunny.obj` (1024×768 primary rays),
-//! the wide tree visits 3.0 nodes and tests 2.25 triangles per ray, the binary one 6.7 and
-//! 0.793: fewer, larger steps.
-//!
-//! At scale, `cargo run --release -p rt-bvh --example large` (height fields; one run, each time
-//! the fastest of three builds): 10 million triangles build in 3.55 s on one thread and 2.45 s
-//! on two, into 535 MiB (56 bytes per triangle; the binary tree 722 MiB), and one build, alone
-//! in a fresh process, held at most 157 bytes per triangle beyond its input, the tree included.
-//! A million copies of one triangle cost one closest-hit ray 2 visits and 1 test.
+//! # Measurements
+//! Every figure (the shootout, rt-bvh against Embree 3, what each step from the binary tree
+//! gains, builds at scale) is on one generated page, `docs/results.md` in the repository, stamped
+//! with the date, the commit and the CPU, and written by `cargo xtask results`; the commands
+//! that measure each part are `cargo xtask compare`, `cargo bench -p rt-benches --features
+//! embree --bench peers`, `cargo run --release -p rt-bvh --example steps` and `--example large`.
 //!
 //! # Example
 //! ```

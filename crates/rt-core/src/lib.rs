@@ -28,7 +28,11 @@
 //! [`Accel::build_from`] builds over any [`Geometry`]: a slice, a [`Mesh`], or an
 //! [`IndexedTriangles`] view of position and index buffers the caller owns. Structures read the
 //! triangles through the indices straight into the layout they keep, with no triangle list in
-//! between (see the [`Geometry`] documentation and the README for what that saves).
+//! between (see the [`Geometry`] documentation).
+//!
+//! Meshes come from files through `rt-scene` (`rt_scene::load_mesh`: OBJ, PLY, glTF), which
+//! also has the camera a renderer needs (`rt_scene::Camera`), or from buffers you already have
+//! ([`IndexedTriangles::from_flat`]).
 //!
 //! # Closest points
 //! [`Accel::closest_point`] finds the primitive nearest to a point (a [`PointHit`]: index, point,
@@ -52,6 +56,14 @@
 //! - Invalid primitives (non-finite, zero-area; [`Primitive::is_valid`]) are never hit.
 //! - Nothing here panics on bad geometry: invalid primitives are left out, invalid rays miss,
 //!   and malformed buffers give a typed [`MeshError`].
+//!
+//! # Features
+//! - `parallel` (off here; the structure crates turn it on by default): the builders' parallel
+//!   patterns ([`par`]) run on rayon's threads. Without it they run in order on the calling
+//!   thread and give the same structures.
+//!
+//! Measurements of every structure are on one generated page, `docs/results.md` in the
+//! repository (date, commit, CPU; written by `cargo xtask results`).
 #![warn(missing_docs)]
 
 mod aabb;

@@ -9,10 +9,10 @@ crate::pod_struct! {
     /// As a [`Primitive`] it uses the watertight test ([`Triangle::intersect_watertight`], Woop,
     /// Benthin & Wald 2013). That is the default because it is the only one of the two that never
     /// lets a ray slip through the shared edge or vertex of two triangles, so the conformance kit
-    /// can demand that every structure finds such hits. It costs 1.28× the time of Möller–Trumbore
-    /// per test (23.7 vs 18.5 ms for a million tests, `cargo bench -p rt-benches --bench
-    /// primitives`), and 0–5% of a BVH's primary-ray speed (bunny 9.03 vs 9.24 Mrays/s,
-    /// `--bench trace`); wrap triangles in [`MtTriangle`] to use Möller–Trumbore instead.
+    /// can demand that every structure finds such hits. A test costs somewhat more than
+    /// Möller–Trumbore's, and a BVH traces a few percent slower with it (`cargo bench -p
+    /// rt-benches --bench primitives` and `--bench trace` measure both); wrap triangles in
+    /// [`MtTriangle`] to use Möller–Trumbore instead.
     ///
     /// Zero-area triangles (and triangles with a non-finite vertex) are invalid: they never report a
     /// hit and structures leave them out.

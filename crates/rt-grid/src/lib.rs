@@ -22,7 +22,7 @@
 //! in every cell of its box; `compare` shows the result as references per primitive. The
 //! (cell, primitive) pairs are counting-sorted into one offset array (`cells`, 4 bytes per cell
 //! plus one) and one reference array (4 bytes per reference): no `Vec` per cell. The overlap tests
-//! run in parallel with rayon for large inputs; the result does not depend on it. O(N + cells)
+//! run in parallel for large inputs (feature `parallel`); the result does not depend on it. O(N + cells)
 //! besides the tests.
 //!
 //! # Traversal
@@ -39,49 +39,25 @@
 //! [`Accel::closest_point`] visits cells in growing shells around
 //! the point's cell ([`nearest::shells`]), tests each cell the query's ball still reaches, and stops
 //! at the first shell wholly outside the ball. Far from the surface the ball holds many empty cells
-//! that a hierarchy would discard at once: on the bunny, 100,000 points (`cargo xtask compare --query closest-point --scene ../shared/meshes/stanford-bunny.obj --structures bvh,kdtree,grid,hgrid,octree`), 4,308 cells and
-//! 315 tests per query, 7 times brute force's speed.
+//! that a hierarchy would discard at once, so closest points are where the grid falls furthest
+//! behind the trees.
 //!
-//! # Measured
-//! The BVH in this section is the binary SAH tree: the `bvh` row when these figures were
-//! measured, `bvh-binary` since rt-bvh's default became its 8-wide tree (faster still; see
-//! rt-bvh's documentation).
+//! # Choosing the density
+//! `density` (λ) trades cells for tests: more cells mean fewer primitives per cell but more
+//! empty steps. The speed peaks where empty steps start to cost more than the tests they save,
+//! at λ = 2 to 4 on the bunny and the random soup, hence the default λ = 4; `cargo run
+//! --release -p rt-grid --example density_sweep` prints the trade-off on a scene of your choice.
+//! Exact insertion (the default) lists a triangle only in the cells it overlaps; listing every
+//! cell of its bounding box (`GridParams::bbox_insertion`, row `grid-bbox`) builds faster but
+//! references and tests several times more on scenes of large triangles.
 //!
-//! One run each of `cargo xtask compare --scene S --rays R --structures
-//! bvh-binary,kdtree,grid,grid-nomailbox` (1024×768 rays, 2 threads, 0 mismatches
-//! everywhere); tests and Mrays/s per ray kind:
-//!
-//! | scene, rays | bvh-binary | kdtree | grid | grid without mailbox |
-//! | --- | --- | --- | --- | --- |
-//! | `random-soup` (20k random triangles), primary | 3.62 / 7.00 | 1.35 / 10.7 | 2.37 / 9.78 | 3.69 / 8.25 |
-//! | `random-soup`, incoherent | 12.5 / 1.06 | 3.65 / 1.65 | 7.63 / 3.16 | 10.9 / 2.42 |
-//! | `random-soup`, shadow | 8.84 / 3.66 | 4.33 / 4.27 | 6.57 / 6.11 | 9.53 / 4.86 |
-//! | bunny, primary | 0.793 / 15.7 | 0.764 / 16.2 | 6.67 / 4.44 | 6.98 / 4.03 |
-//! | bunny, incoherent | 1.59 / 4.62 | 1.52 / 2.22 | 13.5 / 1.74 | 14.2 / 1.85 |
-//! | `teapot-in-stadium`, primary | 2.04 / 7.93 | 2.56 / 10.7 | 533 / 0.191 | 537 / 0.190 |
-//!
-//! Where primitives are spread evenly the grid is the fastest structure here (1.4× the BVH on
-//! primary rays, 3× on incoherent ones), and the mailbox saves a third of its primitive tests.
-//! On the bunny, a surface, 94% of the cells are empty and the others hold 11 triangles each:
-//! the grid runs at 0.28× the BVH, and the mailbox saves little because the bunny's triangles are
-//! small next to the cells. On the teapot in a stadium (a later run, with `hgrid` in the list)
-//! the cells sized for the stadium hold thousands of the teapot's triangles and the grid tests
-//! 533 per ray: the lecture's failure, which `rt-hgrid` answers. Builds: 66 ms for the random
-//! soup (11.1 references per triangle; the exact overlap tests dominate) and 14 ms for the bunny
-//! (2.68), on 2 threads.
-//!
-//! Exact insertion against listing every cell of a primitive's box (`GridParams::bbox_insertion`,
-//! row `grid-bbox`), one run of `cargo xtask compare --scene random-soup --structures
-//! bvh-binary,grid,grid-bbox`: 11.1 against 31.9 references per triangle, 2.36 against 6.65
-//! tests per primary ray, 12.1 against 6.37 Mrays/s, for a build of 51 against 5 ms. On the
-//! bunny, whose triangles are small next to the cells, 2.68 against 3.17 references per
-//! triangle.
-//!
-//! `density` trades cells for tests. `cargo run --release -p rt-grid --example density_sweep`
-//! (bunny, 512×384 primary rays, single-threaded, one run): λ = 1 gives 69k cells and 13.6 tests
-//! per ray, λ = 4 277k and 6.7, λ = 16 1.1M and 3.2; the speed peaks at λ = 4 (2.33 Mrays/s;
-//! 1.96 at λ = 1, 2.03 at λ = 16) as empty steps replace tests. With `-- random-soup` it peaks at
-//! λ = 2–4 (5.91 and 5.90 Mrays/s), hence the default λ = 4.
+//! # Measurements
+//! On one generated page, `docs/results.md` in the repository (date, commit, CPU; written by
+//! `cargo xtask results`). What they show: where primitives are spread evenly (the random soup)
+//! the grid traces as fast as a BVH and its mailbox saves a third of its tests; on a surface
+//! (the bunny) most cells are empty and a tree is several times faster; on the teapot in a
+//! stadium, cells sized for the stadium hold thousands of the teapot's triangles — the lecture's
+//! failure, which `rt-hgrid` answers.
 //!
 //! # Example
 //! ```

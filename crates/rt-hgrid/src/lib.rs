@@ -36,36 +36,21 @@
 //! # Closest points
 //! [`Accel::closest_point`] visits the top grid's cells in growing
 //! shells around the point (`rt_grid::nearest::shells`), and a cell's nested grid the same way
-//! before the shell goes on. On the bunny, 100,000 points (`cargo xtask compare --query closest-point --scene ../shared/meshes/stanford-bunny.obj --structures bvh,kdtree,grid,hgrid,octree`): 698 cells and 294 tests per
-//! query, 33 times brute force's speed.
+//! before the shell goes on.
 //!
-//! # Measured
-//! The BVH in this section is the binary SAH tree: the `bvh` row when these figures were
-//! measured, `bvh-binary` since rt-bvh's default became its 8-wide tree (faster still; see
-//! rt-bvh's documentation).
+//! # Measurements
+//! On one generated page, `docs/results.md` in the repository (date, commit, CPU; written by
+//! `cargo xtask results`). What they show: on the teapot in a stadium, where the uniform grid's
+//! cells sized for the stadium hold thousands of the teapot's triangles, the hierarchical grid
+//! tests two orders of magnitude fewer primitives per ray for a little more memory
+//! ([`HGridParams::lean`] takes no more memory than the uniform grid and still tests far fewer).
+//! Where primitives are spread evenly (`random-soup`) the refinement buys nothing and the uniform
+//! grid is better; on surfaces both grids trail the trees.
 //!
-//! One run each of `cargo xtask compare --scene S --rays R --structures
-//! bvh-binary,kdtree,grid,grid-nomailbox,hgrid` (1024×768 rays, 2 threads, 0 mismatches in all
-//! twelve runs over the four scenes and three ray kinds); primitive tests per ray / Mrays/s /
-//! MiB:
-//!
-//! | scene, rays | bvh-binary | grid | hgrid |
-//! | --- | --- | --- | --- |
-//! | `teapot-in-stadium`, primary | 2.04 / 7.93 / 3.29 | 533 / 0.191 / 2.63 | 3.71 / 3.15 / 3.53 |
-//! | `teapot-in-stadium`, shadow | 0.690 / 10.4 | 289 / 0.247 | 3.71 / 2.55 |
-//! | `teapot-in-stadium`, incoherent | 1.53 / 7.61 | 7.31 / 1.80 | 4.25 / 2.83 |
-//! | `random-soup`, primary | 3.62 / 6.64 / 1.70 | 2.36 / 7.88 / 1.84 | 5.92 / 6.21 / 2.36 |
-//! | bunny, primary | 0.793 / 15.0 / 5.01 | 6.67 / 4.03 / 4.15 | 5.23 / 4.68 / 5.55 |
-//! | `sphereflake`, primary | 0.886 / 23.2 / 5.74 | 5.91 / 3.34 / 4.83 | 3.64 / 4.04 / 6.74 |
-//!
-//! On the teapot in a stadium the uniform grid's cells sized for the stadium hold thousands of
-//! the teapot's triangles; the hierarchical grid needs 1/144 of its primitive tests per primary
-//! ray with 1.34× its memory and runs 16× faster. In one run of `cargo xtask compare --scene
-//! teapot-in-stadium --structures bvh-binary,grid,hgrid,hgrid-lean`, [`HGridParams::lean`]
-//! takes 2.57 MiB, less than the grid's 2.63, for 11.9 tests per ray against the grid's 533
-//! (1/45; 3.03 against 0.208 Mrays/s). Where primitives are spread evenly (`random-soup`) the
-//! refinement buys nothing and the uniform grid is better; on surfaces (bunny, sphereflake) both
-//! grids trail the BVH.
+//! # Depends on rt-grid
+//! The one structure crate that depends on another: each level is a uniform grid, and this
+//! crate uses `rt-grid`'s cell planes ([`rt_grid::GridShape`]), exact insertion, 3D-DDA and
+//! shells, so every level rounds exactly as the uniform grid does.
 //!
 //! # Example
 //! ```

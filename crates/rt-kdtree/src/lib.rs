@@ -22,8 +22,8 @@
 //!   `depth_base + 1.3 · log2 N` (pbrt: `8 + 1.3 · log2 N`).
 //! - **Empty space** (`empty_cut`): an empty slab at a face of the cell that spans at least this
 //!   fraction of the cell's extent is cut off without pricing any plane. The SAH with an
-//!   empty-side bonus would pick most such cuts anyway; skipping the sweep there saves 7% of the
-//!   default build on the bunny for 1% more primitive tests.
+//!   empty-side bonus would pick most such cuts anyway; skipping the sweep there saves build
+//!   time for slightly more primitive tests (see the sweep below).
 //! - **O(N log N) build**: the split candidates (the bounds of each primitive's part in the cell,
 //!   per axis) are sorted once, and each node splits the sorted lists in linear time; only the
 //!   primitives straddling the plane get new candidates, which are sorted and merged in.
@@ -32,8 +32,9 @@
 //! - **Perfect splits** (`perfect_splits`): a straddling triangle is clipped to each child cell
 //!   ([`rt_core::clip_triangle_bounds`]), so its candidates are the bounds of the part inside
 //!   and a triangle that merely has its bounding box in a cell is not referenced there.
-//! - **Parallel**: the two subtrees of a large node are built with `rayon::join`, each into its
-//!   own buffer, appended in a fixed order: the tree is the same as the sequential build's.
+//! - **Parallel** (feature `parallel`, default): the two subtrees of a large node are built at
+//!   once (`rt_core::par::join`), each into its own buffer, appended in a fixed order: the tree
+//!   is the same as the sequential build's.
 //!
 //! # Memory
 //! 8 bytes per [`Node`] (split position, then axis or leaf flag in two bits and a 30-bit index;
@@ -62,65 +63,29 @@
 //! # Closest points
 //! [`Accel::closest_point`] descends the near side of each plane
 //! first and goes to the far side only while the query's ball reaches across it; each stack entry
-//! carries its cell, cut from the scene box by the planes above it (`nearest.rs`). On the bunny,
-//! 100,000 points (`cargo xtask compare --query closest-point --scene ../shared/meshes/stanford-bunny.obj --structures bvh,kdtree,grid,hgrid,octree`): 504 visits and 73.7 tests per query, 123 times brute force's speed.
-//!
-//! # Measured
-//! The BVH in this section is the binary SAH tree: the `bvh` row when these figures were
-//! measured, `bvh-binary` since rt-bvh's default became its 8-wide tree (faster still; see
-//! rt-bvh's documentation).
-//!
-//! Stanford bunny (69,451 triangles), one run of `cargo xtask compare --scene
-//! ../shared/meshes/stanford-bunny.obj` (1024×768 primary rays, 2 threads, builds on 2 threads,
-//! fastest of 3), with the SAH BVH for reference:
-//!
-//! | row | build ms | MiB | nodes | depth | empty leaves | prims/leaf | refs/prim | visits/ray | tests/ray | Mrays/s |
-//! | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |
-//! | `kdtree` (`sah`) | 242.6 | 10.27 | 822,567 | 28 | 57.4% | 2.42 | 6.09 | 15.1 | 0.764 | 14.6 |
-//! | `kdtree-wald-havran` | 203.4 | 8.44 | 612,317 | 29 | 59.1% | 2.90 | 5.23 | 14.3 | 1.04 | 13.7 |
-//! | `kdtree-restart` | 199.7 | 10.27 | 822,567 | 28 | 57.4% | 2.42 | 6.09 | 40.3 | 0.774 | 6.69 |
-//! | `kdtree-noclip` | 228.0 | 12.24 | 980,053 | 28 | 37.4% | 2.03 | 8.98 | 16.1 | 0.814 | 11.1 |
-//! | `kdtree-pbrt` | 107.8 | 4.34 | 149,303 | 29 | 44.7% | 5.19 | 3.09 | 16.6 | 4.54 | 8.24 |
-//! | `bvh` (binary, now `bvh-binary`) | 42.1 | 5.01 | 77,359 | 19 | 0% | 1.80 | 1.00 | 6.8 | 0.793 | 17.4 |
-//!
-//! The default tree tests fewer triangles per primary ray than the SAH BVH (0.764 against
-//! 0.793). Perfect splits save 6% of the tests and 16% of the memory and make the tree 1.3×
-//! faster (`noclip` against `sah`). The stackless traversal pays for its restarts with 2.7× the
-//! node visits and half the speed: on a CPU a 64-entry stack costs nothing worth saving.
-//!
-//! Single-threaded builds, one run of `cargo bench -p rt-benches --bench trace` (criterion
-//! medians): `sah` 348.5 ms on the bunny, 9.4× the SAH BVH's 37.0 ms (`wald-havran` 305.0 ms,
-//! 8.2×; the parallel `sah` build 206.8 ms on 2 threads); sphereflake 219.6 against 37.4 ms
-//! (5.9×; `wald-havran` 3.9×). `cargo xtask compare --scene ../shared/meshes/stanford-bunny.obj
-//! --threads 1` gives the same 9.4× (335.4 against 35.7 ms) and traces primary rays at 0.82× the
-//! BVH's speed (8.57 against 10.4 Mrays/s; `wald-havran` 8.62). On the teapot (6,320
-//! triangles) the kd-tree is the faster one: 29.6 against 24.5 Mrays/s in `cargo xtask compare
-//! --scene ../shared/meshes/teapot.obj`, with 0.650 tests per ray against 0.836.
+//! carries its cell, cut from the scene box by the planes above it (`nearest.rs`).
 //!
 //! # Choosing the constants
 //! The ratio K_T / K_I sets the leaf size, and the depth limit and the bad-refine allowance
-//! decide how far a path may go. `cargo run --release -p rt-kdtree --example cost_sweep` prints
-//! the trade-off on the bunny (1024×768 primary rays; K_I = 20, λ = 0.8; build single-threaded,
-//! best of 3, one run):
+//! decide how far a path may go. Wald & Havran's published constants ([`KdParams::wald_havran`]:
+//! K_T 15, depth `8 + 1.3 · log2 N`) make a smaller tree that tests more primitives per ray than
+//! the binned-SAH BVH. The default ([`KdParams::sah`]) lets a path take up to three
+//! non-improving splits, which finds the splits that pay off two levels down, while a higher K_T
+//! and one level less of depth keep the tree from growing where they do not; cutting off wide
+//! empty slabs without pricing pays for most of the extra build time. Prefer `wald_havran` for
+//! the smaller tree and faster build; lower `traversal_cost` further when a primitive test is
+//! expensive compared with a traversal step (curved or displaced primitives).
+//! `cargo run --release -p rt-kdtree --example cost_sweep` prints the trade-off (nodes, depth,
+//! references, visits and tests per ray, build time) on the bunny.
 //!
-//! | configuration | nodes | depth | refs/prim | visits/ray | tests/ray | build ms |
-//! | --- | ---: | ---: | ---: | ---: | ---: | ---: |
-//! | Wald & Havran: K_T 15, depth `8 + 1.3 · log2 N` | 612,317 | 29 | 5.23 | 14.3 | 1.040 | 297 |
-//! | the same with K_T 5 | 1,022,311 | 29 | 6.76 | 15.0 | 0.756 | 375 |
-//! | the same with 1 bad refine | 914,059 | 29 | 6.63 | 14.9 | 0.768 | 365 |
-//! | K_T 25, 3 bad refines, depth `7 + 1.3 · log2 N` | 852,769 | 28 | 6.34 | 15.0 | 0.758 | 334 |
-//! | the same with `empty_cut` 0.25 (the default) | 822,567 | 28 | 6.09 | 15.1 | 0.764 | 299 |
-//!
-//! With Wald & Havran's constants the tree needs 1.3× the BVH's primitive tests on these rays.
-//! A smaller traversal cost or a tolerated non-improving split gets below the BVH, at 1.5–1.7×
-//! the nodes and about 1.25× the build time. The default instead lets a path take up to three
-//! non-improving splits, which finds the splits that pay off two levels down, while a higher
-//! K_T and one level less of depth keep the tree from growing where they do not; cutting off
-//! wide empty slabs without pricing then pays for most of the extra build time. Both trees
-//! trace primary and incoherent rays at the same speed on this CPU, within this host's noise. Prefer
-//! [`KdParams::wald_havran`] for the smaller tree and faster build; lower `traversal_cost`
-//! further when a primitive test is expensive compared with a traversal step (curved or
-//! displaced primitives).
+//! # Measurements
+//! The kd-tree's figures beside every other structure's (build time, memory, shape, visits and
+//! tests per ray, speed on several scenes and ray kinds, one thread and two), and the sweep
+//! above, are on one generated page, `docs/results.md` in the repository, stamped with the date,
+//! the commit and the CPU and written by `cargo xtask results`. In short: the default tree tests
+//! fewer triangles per ray than the binned-SAH BVH but visits more nodes, builds several times
+//! slower, and the stackless restart pays for its restarts with extra visits (on a CPU a fixed
+//! stack costs nothing worth saving).
 //!
 //! # Example
 //! ```

@@ -26,16 +26,15 @@
 //! tree never holds more than `max_refs_per_prim` references per primitive (each node has a
 //! budget of references, and what its children's lists leave of it is shared among them), and
 //! the build, depth first, holds at most about the root's list again as scratch (28 bytes a
-//! reference). Large nodes' subtrees are built in parallel with rayon, and the result does not
-//! depend on the threads. Cost: O(N) clipped primitives per level, O(N log N) in all for
+//! reference). Large nodes' subtrees are built in parallel (feature `parallel`), and the result
+//! does not depend on the threads. Cost: O(N) clipped primitives per level, O(N log N) in all for
 //! primitives spread over a surface.
 //!
 //! # Memory
 //! 8 bytes per node ([`Node`]: a reference range, or the index of its children's [`Block`]). The
 //! eight children of a node sit together in one 64-byte block, empty ones included, so a child
 //! is found without decoding a mask, and a node's children share one cache line. Plus 4 bytes
-//! per reference and the copy of the primitives. On the bunny the default tree has 151,729
-//! nodes, 43.1% of its leaves empty, and 5.10 references per triangle.
+//! per reference and the copy of the primitives.
 //!
 //! # Traversal
 //! Revelles, Ureña & Lastra's parametric algorithm (2000), iterative, with a fixed stack of
@@ -65,10 +64,9 @@
 //!   takes less memory than the uniform grid.
 //! - `max_depth` (default 12, at most [`MAX_DEPTH`]): below it, fans of thin triangles around a
 //!   pole (surfaces of revolution, such as the teapot's base) keep nodes crowded however far they
-//!   are cut. On the teapot in a stadium (512×384 primary rays, single-threaded), depth 16
-//!   needs 3.88 tests per ray against depth 12's 4.13, for 1.7× the memory (3.99 against 2.37
-//!   MiB), 3.4× the build time (127.5 against 37.2 ms) and no gain in speed (2.46 Mrays/s each);
-//!   depth 8 cannot reach the teapot's triangles from the stadium's scale (72.6 tests).
+//!   are cut. On the teapot in a stadium a deeper limit saves few tests for much more memory and
+//!   build time and no speed, while a shallower one cannot reach the teapot's triangles from
+//!   the stadium's scale.
 //! - `max_refs_per_prim` (default 16): the safety bound on memory.
 //!
 //! `cargo run --release -p rt-octree --example threshold_sweep -- <scene>` prints the trade-off
@@ -77,42 +75,16 @@
 //! # Closest points
 //! [`Accel::closest_point`] visits children nearest first, cutting
 //! each box at the same midpoints the builder used, and skips any child farther than the best
-//! distance so far (`nearest.rs`). On the bunny, 100,000 points (`cargo xtask compare --query closest-point --scene ../shared/meshes/stanford-bunny.obj --structures bvh,kdtree,grid,hgrid,octree`): 108 visits and 210 tests
-//! per query, 108 times brute force's speed.
+//! distance so far (`nearest.rs`).
 //!
-//! # Measured
-//! The BVH in this section is the binary SAH tree: the `bvh` row when these figures were
-//! measured, `bvh-binary` since rt-bvh's default became its 8-wide tree (faster still; see
-//! rt-bvh's documentation).
-//!
-//! One run each of `cargo xtask compare --scene S --rays R --structures
-//! bvh-binary,kdtree,grid,hgrid,octree,octree-lean` (1024×768 rays, 2 threads, 0 mismatches in
-//! every run). The figures are cell visits per ray / primitive tests per ray / Mrays/s / MiB:
-//!
-//! | scene, rays | bvh-binary | grid | octree | octree-lean |
-//! | --- | --- | --- | --- | --- |
-//! | bunny, primary | 6.8 / 0.793 / 21.0 / 5.01 | 14.2 / 6.67 / 4.36 / 4.15 | 5.7 / 3.43 / 8.15 / 4.90 | 5.3 / 6.74 / 7.04 / 3.77 |
-//! | `teapot-in-stadium`, primary | 15.4 / 2.04 / 13.9 / 3.29 | 26.1 / 533 / 0.222 / 2.63 | 14.8 / 4.13 / 4.10 / 2.37 | 14.5 / 6.09 / 4.72 / 2.27 |
-//! | `teapot-in-stadium`, shadow | 14.4 / 0.690 / 14.9 | 32.7 / 289 / 0.435 | 12.4 / 4.55 / 4.79 | 12.1 / 6.89 / 4.26 |
-//! | `teapot-in-stadium`, incoherent | 10.6 / 1.53 / 8.27 | 21.5 / 7.31 / 2.84 | 9.5 / 7.00 / 2.89 | 8.8 / 13.6 / 2.61 |
-//! | `sphereflake`, primary | 5.4 / 0.886 / 24.4 / 5.74 | 24.6 / 5.91 / 3.40 / 4.83 | 6.0 / 2.61 / 8.86 / 6.10 | 5.8 / 5.14 / 7.96 / 4.62 |
-//! | `random-soup`, primary | 17.6 / 3.62 / 9.40 / 1.70 | 4.3 / 2.36 / 12.6 / 1.84 | 4.9 / 4.73 / 10.0 / 2.18 | 4.5 / 7.05 / 8.75 / 1.43 |
-//!
-//! On the bunny the octree visits 0.40× the grid's cells per ray (0.37× for the lean preset,
-//! which takes 0.91× the grid's memory) and traces 1.9× as fast. On the teapot in a stadium it
-//! needs 1/129 of the grid's primitive tests per primary ray, in less memory, and traces 18× as
-//! fast. On surfaces the BVH is 2.6× as fast (bunny) or more: the octree tests more primitives,
-//! since cubes cannot follow a surface as fitted boxes do, and a step costs more. Where
-//! primitives are spread evenly (`random-soup`) the octree is about as fast as the BVH and the
-//! uniform grid is better than both. Nor do fewer visits always pay: on the bunny's incoherent
-//! rays the octree visits 11.3 cells per ray against the grid's 28.0 and was no faster (1.53
-//! against 1.64 Mrays/s in a run with every row).
-//!
-//! Single-threaded, in criterion (`cargo bench -p rt-benches --bench trace --
-//! "(build|trace-primary)/bunny/(rt-bvh/binary|rt-grid|rt-octree)"`, medians, 512×384
-//! primary rays): the bunny's octree builds in 148.8 ms (95.9 ms in parallel on 2 threads)
-//! against the SAH BVH's 34.8 ms and the grid's 25.8 ms, and traces in 61.8 ms against the BVH's
-//! 23.2 ms and the grid's 90.1 ms.
+//! # Measurements
+//! On one generated page, `docs/results.md` in the repository (date, commit, CPU; written by
+//! `cargo xtask results`). What they show: the octree visits a fraction of the uniform grid's
+//! cells on surfaces and needs two orders of magnitude fewer tests on the teapot in a stadium,
+//! in less memory; on surfaces the BVHs are faster still (cubes cannot follow a surface as
+//! fitted boxes do, and a step costs more); where primitives are spread evenly the uniform grid
+//! is better than both. Fewer visits do not always pay: on incoherent rays the octree is no
+//! faster than the grid.
 //!
 //! # Example
 //! ```

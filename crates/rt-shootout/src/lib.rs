@@ -192,3 +192,22 @@ pub fn exit_code(outcome: Result<Vec<Report>, String>) -> ExitCode {
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
+
+/// The Rust examples of the repository's README and guide (`docs/`), compiled (and run, where
+/// they need no file) as doctests of this crate, which depends on every crate they use. Outside
+/// a doctest build the items do not exist, so the packaged crate does not need the files.
+#[cfg(doctest)]
+mod guide {
+    #[doc = include_str!("../../../README.md")]
+    struct Readme;
+    #[doc = include_str!("../../../docs/using.md")]
+    struct Using;
+    #[doc = include_str!("../../../docs/closest-points.md")]
+    struct ClosestPoints;
+    #[doc = include_str!("../../../docs/instances.md")]
+    struct Instances;
+    #[doc = include_str!("../../../docs/dynamic.md")]
+    struct Dynamic;
+    #[doc = include_str!("../../../docs/your-structure.md")]
+    struct YourStructure;
+}

@@ -1,0 +1,544 @@
+//! `cargo xtask results`: the one page of measurements the README, the guide and the crate docs
+//! link to, so that no figure is copied into a doc where it would go stale.
+//!
+//! It runs a fixed list of this binary's own commands (`compare`, `scale`, `animate`, each with
+//! `--json`) as child processes, exactly as the page shows them, and writes their figures as
+//! Markdown tables under a stamp of the date, the commit and the CPU. With `--embree` it also runs
+//! the Embree benchmark (`cargo bench -p rt-benches --features embree --bench peers`) and embeds
+//! its tables. Any mismatch or failure in any command fails the page: a page is written only
+//! from runs whose every answer was checked.
+
+use serde_json::Value;
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::Instant;
+
+/// Flags of `cargo xtask results`.
+#[derive(clap::Args, Debug)]
+pub struct Args {
+    /// The page to write.
+    #[arg(short, long, default_value = "docs/results.md")]
+    pub out: PathBuf,
+    /// A small page from small runs on built-in scenes (seconds instead of minutes), to check
+    /// the generator itself; its figures measure nothing worth quoting.
+    #[arg(long)]
+    pub quick: bool,
+    /// Also measure rt-bvh against Embree 3 (needs Debian's libembree-dev).
+    #[arg(long)]
+    pub embree: bool,
+}
+
+/// The rows every shootout table shows: each structure's default and the presets the guide
+/// discusses.
+const ROWS: &str = "bvh,bvh-binary,bvh-median,bvh-middle,kdtree,kdtree-restart,grid,hgrid,octree";
+
+/// One structure of each kind, for the tables that compare kinds.
+const MAIN_ROWS: &str = "bvh,kdtree,grid,hgrid,octree";
+
+/// The bunny, for the runs on a real mesh (the built-in scenes are procedural).
+const BUNNY: &str = "../shared/meshes/stanford-bunny.obj";
+
+/// What one page holds: the arguments of each run, by section.
+struct Plan {
+    scenes: Vec<&'static str>,
+    rows: &'static str,
+    image: [&'static str; 4],
+    other_rays: Vec<&'static str>,
+    real: &'static str,
+    points: &'static str,
+    instances: &'static str,
+    scale: [&'static str; 4],
+    animate: Vec<&'static str>,
+    more: Vec<&'static str>,
+}
+
+impl Plan {
+    fn new(quick: bool) -> Self {
+        if quick {
+            return Self {
+                scenes: vec!["sphereflake:20k", "random-soup:5k"],
+                rows: "bvh,kdtree,grid",
+                image: ["--width", "64", "--height", "48"],
+                other_rays: vec!["random-soup:5k"],
+                real: "sphereflake:20k",
+                points: "2k",
+                instances: "9",
+                scale: ["--min", "1k", "--max", "3k"],
+                animate: vec!["--scene", "teapot:2k", "--frames", "2"],
+                more: vec!["sphereflake:20k", "random-soup:5k"],
+            };
+        }
+        Self {
+            scenes: vec![
+                BUNNY,
+                "sphereflake",
+                "teapot-in-stadium",
+                "random-soup",
+                "terrain",
+            ],
+            rows: ROWS,
+            image: ["--width", "1024", "--height", "768"],
+            other_rays: vec![BUNNY, "teapot-in-stadium"],
+            real: BUNNY,
+            points: "100k",
+            instances: "1000",
+            scale: ["--min", "10k", "--max", "1M"],
+            animate: vec![],
+            more: vec![
+                "../shared/meshes/teapot.obj",
+                "../shared/meshes/beetle-alt.obj",
+                "../shared/meshes/rocker-arm.obj",
+                "../shared/meshes/cheburashka.obj",
+                "../shared/meshes/fandisk.obj",
+                "../shared/meshes/homer.obj",
+            ],
+        }
+    }
+}
+
+/// Why no page was written.
+#[derive(Debug)]
+pub enum Failure {
+    /// Bad input, found before anything ran (exit status 2).
+    BadInput(String),
+    /// A measurement failed or found a mismatch (exit status 1).
+    Run(String),
+}
+
+/// Runs the task: every measurement, then the page. Returns the page's path.
+pub fn run(args: &Args) -> Result<PathBuf, Failure> {
+    crate::render::check_output(&args.out, "Markdown").map_err(Failure::BadInput)?;
+    if !args.quick && !Path::new(BUNNY).is_file() {
+        return Err(Failure::BadInput(format!(
+            "{BUNNY} not found: run from the repository root with the shared meshes beside it \
+             (or use --quick)"
+        )));
+    }
+    measure_all(args).map_err(Failure::Run)
+}
+
+fn measure_all(args: &Args) -> Result<PathBuf, String> {
+    let plan = Plan::new(args.quick);
+    let started = Instant::now();
+    let mut page = stamp(args)?;
+    let image: Vec<&str> = plan.image.to_vec();
+
+    page += "\n## Primary rays\n\nOne ray per pixel from each scene's camera, every answer \
+             checked (against brute force on a random subset of 20,000 rays, and against each \
+             other on all of them); builds and traces on every thread. The hit share says how \
+             many rays hit the mesh: a view where most rays miss times the call, not the \
+             traversal.\n";
+    for scene in &plan.scenes {
+        let mut argv = vec!["compare", "--scene", scene, "-s", plan.rows];
+        argv.extend(&image);
+        argv.push("--json");
+        let run = measure(&argv)?;
+        shootout_table(&mut page, &run);
+    }
+
+    page += "\n## More meshes\n\nPrimary rays on meshes nothing here was tuned on, one of each \
+             structure; Mrays/s (all threads), every answer checked.\n\n";
+    let mut runs = Vec::new();
+    for scene in &plan.more {
+        let mut argv = vec!["compare", "--scene", scene, "-s", MAIN_ROWS];
+        argv.extend(&image);
+        argv.push("--json");
+        runs.push(measure(&argv)?);
+    }
+    speed_table(&mut page, &runs);
+
+    page += "\n## Other rays\n\nIncoherent rays (random origins in the scene box, random \
+             directions: like diffuse bounces) and shadow rays (from each primary hit to a point \
+             light, any-hit queries), as many as the image has pixels.\n";
+    for scene in &plan.other_rays {
+        for kind in ["incoherent", "shadow"] {
+            let mut argv = vec!["compare", "--scene", scene, "--rays", kind, "-s", plan.rows];
+            argv.extend(&image);
+            argv.push("--json");
+            let run = measure(&argv)?;
+            shootout_table(&mut page, &run);
+        }
+    }
+
+    page += "\n## One thread\n\nThe same primary rays with builds and traces on one thread.\n";
+    let mut argv = vec!["compare", "--scene", plan.real, "-s", plan.rows, "-j", "1"];
+    argv.extend(&image);
+    argv.push("--json");
+    let run = measure(&argv)?;
+    shootout_table(&mut page, &run);
+
+    page += "\n## Closest points\n\nThe primitive nearest to each point: half of the points \
+             anywhere in the scene box grown by a quarter on every side, half within 2% of its \
+             diagonal from the surface.\n";
+    let argv = [
+        "compare",
+        "--scene",
+        plan.real,
+        "--query",
+        "closest-point",
+        "--points",
+        plan.points,
+        "-s",
+        "bvh,kdtree,grid,hgrid,octree",
+        "--json",
+    ];
+    let run = measure(&argv)?;
+    shootout_table(&mut page, &run);
+
+    page += "\n## Instances\n\nA field of instances of one mesh (each rotated, scaled unevenly, \
+             every seventh mirrored) under rt-bvh's top-level BVH, each row's structure built \
+             once and shared by every instance.\n";
+    let mut argv = vec![
+        "compare",
+        "--scene",
+        plan.real,
+        "--instances",
+        plan.instances,
+        "-s",
+        "bvh,bvh-binary,kdtree,grid,hgrid,octree",
+    ];
+    argv.extend(&image);
+    argv.push("--json");
+    let run = measure(&argv)?;
+    shootout_table(&mut page, &run);
+
+    page += "\n## Scale\n\nEach structure built and traced on the terrain at growing sizes \
+             (256×192 primary rays per size), answers checked against the first row.\n";
+    let mut argv = vec!["scale", "--scene", "terrain"];
+    argv.extend(plan.scale);
+    argv.push("--json");
+    let run = measure(&argv)?;
+    scale_table(&mut page, &run);
+
+    page += "\n## Dynamic scenes\n\nThe teapot exploding: each frame refitted (structures that \
+             can refit) and rebuilt, then traced; every frame checked against brute force.\n";
+    let mut argv = vec!["animate"];
+    argv.extend(&plan.animate);
+    argv.push("--json");
+    let run = measure(&argv)?;
+    animate_table(&mut page, &run);
+
+    if args.embree {
+        page += &embree()?;
+    }
+    let _ = writeln!(
+        page,
+        "\n---\nAll runs took {:.0} s.",
+        started.elapsed().as_secs_f64()
+    );
+    std::fs::write(&args.out, page)
+        .map_err(|e| format!("{}: cannot write: {e}", args.out.display()))?;
+    Ok(args.out.clone())
+}
+
+/// One finished run: its command line as the page shows it, and its JSON.
+struct Run {
+    command: String,
+    json: Value,
+}
+
+/// Runs `cargo xtask ARGV...` (this very binary) and parses its JSON; fails on any exit status
+/// but 0, which includes any answer that disagreed with brute force.
+fn measure(argv: &[&str]) -> Result<Run, String> {
+    let command = format!("cargo xtask {}", argv.join(" "));
+    eprintln!("{command}");
+    let exe = std::env::current_exe().map_err(|e| format!("cannot find this binary: {e}"))?;
+    let out = Command::new(exe)
+        .args(argv)
+        .output()
+        .map_err(|e| format!("{command}: cannot run: {e}"))?;
+    if !out.status.success() {
+        let err = String::from_utf8_lossy(&out.stderr);
+        return Err(format!(
+            "{command} failed ({}): {}",
+            out.status,
+            err.lines().next().unwrap_or("")
+        ));
+    }
+    let json = serde_json::from_slice(&out.stdout)
+        .map_err(|e| format!("{command}: its output is not one JSON object: {e}"))?;
+    Ok(Run { command, json })
+}
+
+/// The page's first lines: what it is, and when, where and on what it was measured.
+fn stamp(args: &Args) -> Result<String, String> {
+    let git = |a: &[&str]| {
+        Command::new("git")
+            .args(a)
+            .output()
+            .ok()
+            .filter(|o| o.status.success())
+            .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned())
+    };
+    let commit = git(&["rev-parse", "--short", "HEAD"]).unwrap_or_else(|| "unknown".into());
+    let dirty =
+        git(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
+    let cpu = std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split_once(':'))
+                .map(|(_, v)| v.trim().to_owned())
+        })
+        .unwrap_or_else(|| format!("unknown ({})", std::env::consts::ARCH));
+    let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let rustc = Command::new("rustc")
+        .arg("--version")
+        .output()
+        .ok()
+        .map(|o| String::from_utf8_lossy(&o.stdout).trim().to_owned())
+        .unwrap_or_else(|| "rustc (unknown version)".into());
+    let mut s = String::from("# Results\n\n");
+    if args.quick {
+        s += "**A quick page from small runs, for checking the generator: its figures measure \
+              nothing worth quoting.**\n\n";
+    }
+    let _ = writeln!(
+        s,
+        "Written by `cargo xtask results{}{}` on {} (UTC) at commit {commit}{}, on {cpu} with \
+         {threads} threads, built by {rustc} with the workspace's release profile \
+         (`codegen-units = 1`, thin LTO).\n",
+        if args.quick { " --quick" } else { "" },
+        if args.embree { " --embree" } else { "" },
+        today(),
+        if dirty {
+            " plus uncommitted changes"
+        } else {
+            ""
+        },
+    );
+    s += "Every figure below comes from the command printed above its table, run by that \
+          command in this page's run. Absolute speeds move by up to ±30% between runs on a \
+          shared machine; ratios within one table are what to compare. A program that depends \
+          on these crates builds with its own release profile: see the guide's page on using \
+          the crates for what that changes.\n";
+    Ok(s)
+}
+
+/// Today's date, `YYYY-MM-DD`, from the system clock (civil-from-days, Howard Hinnant's
+/// algorithm).
+fn today() -> String {
+    let secs = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0, |d| d.as_secs());
+    let z = (secs / 86_400) as i64 + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let day = doy - (153 * mp + 2) / 5 + 1;
+    let month = if mp < 10 { mp + 3 } else { mp - 9 };
+    let year = yoe + era * 400 + i64::from(month <= 2);
+    format!("{year:04}-{month:02}-{day:02}")
+}
+
+fn f(v: &Value) -> f64 {
+    v.as_f64().unwrap_or(f64::NAN)
+}
+
+/// Three significant digits.
+fn sig(x: f64) -> String {
+    if !x.is_finite() {
+        return "-".into();
+    }
+    let digits = if x.abs() >= 100.0 {
+        0
+    } else if x.abs() >= 10.0 {
+        1
+    } else if x.abs() >= 1.0 {
+        2
+    } else {
+        3
+    };
+    format!("{x:.digits$}")
+}
+
+/// A `compare --json` run as a table: per row build time, memory, visits and tests per query,
+/// speed and the speedup over brute force.
+fn shootout_table(page: &mut String, run: &Run) {
+    let j = &run.json;
+    let points = j["query"] == "closest-point";
+    let (unit, speed) = if points {
+        ("query", "Mqueries/s")
+    } else {
+        ("ray", "Mrays/s")
+    };
+    let hits = j["hit_share"].as_f64().map_or(String::new(), |h| {
+        format!(", {:.1}% of them hit", 100.0 * h)
+    });
+    let _ = writeln!(
+        page,
+        "\n### {} ({} triangles), {} {}{hits}\n\n`{}` ({} threads, {} checked against brute \
+         force, 0 mismatches)\n",
+        j["scene"].as_str().unwrap_or("?"),
+        j["triangles"],
+        j["rays"],
+        if points {
+            "closest-point queries".to_owned()
+        } else {
+            format!("{} rays", j["ray_kind"].as_str().unwrap_or("?"))
+        },
+        run.command,
+        j["threads"],
+        j["checked_rays"],
+    );
+    let _ = writeln!(
+        page,
+        "| structure | build ms | memory MiB | visits/{unit} | tests/{unit} | {speed} | × brute force |\n| --- | ---: | ---: | ---: | ---: | ---: | ---: |"
+    );
+    for row in j["results"].as_array().into_iter().flatten() {
+        let _ = writeln!(
+            page,
+            "| {} | {} | {:.2} | {} | {} | {} | {:.0} |",
+            row["structure"].as_str().unwrap_or("?"),
+            sig(f(&row["build_ms"])),
+            f(&row["memory_bytes"]) / (1024.0 * 1024.0),
+            sig(f(&row["avg_visits"])),
+            sig(f(&row["avg_prim_tests"])),
+            sig(f(&row["mrays_per_s"])),
+            f(&row["speedup"]),
+        );
+    }
+}
+
+/// Several `compare --json` runs as one table: per scene its size, hit share and every row's
+/// speed, the commands listed under it.
+fn speed_table(page: &mut String, runs: &[Run]) {
+    let Some(first) = runs.first() else { return };
+    let rows: Vec<String> = first.json["results"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|r| r["structure"].as_str().map(String::from))
+        .filter(|name| name != "brute-force")
+        .collect();
+    let _ = writeln!(
+        page,
+        "| scene | triangles | hit | {} |\n| --- | ---: | ---: |{}",
+        rows.join(" | "),
+        " ---: |".repeat(rows.len())
+    );
+    for run in runs {
+        let j = &run.json;
+        let speed = |name: &str| {
+            j["results"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .find(|r| r["structure"] == name)
+                .map_or("-".into(), |r| sig(f(&r["mrays_per_s"])))
+        };
+        let cells: Vec<String> = rows.iter().map(|n| speed(n)).collect();
+        let _ = writeln!(
+            page,
+            "| {} | {} | {:.1}% | {} |",
+            j["scene"].as_str().unwrap_or("?"),
+            j["triangles"],
+            100.0 * f(&j["hit_share"]),
+            cells.join(" | ")
+        );
+    }
+    page.push('\n');
+    for run in runs {
+        let _ = writeln!(page, "- `{}`", run.command);
+    }
+}
+
+/// A `scale --json` run as a table: per size and row the build and trace cost, bytes per
+/// triangle and the build's peak memory.
+fn scale_table(page: &mut String, run: &Run) {
+    let j = &run.json;
+    let _ = writeln!(
+        page,
+        "\n`{}` ({} threads, {} rays per size)\n\n| triangles | structure | build ns/triangle | trace ns/ray | bytes/triangle | build peak MiB | scratch × |\n| ---: | --- | ---: | ---: | ---: | ---: | ---: |",
+        run.command, j["threads"], j["rays"]
+    );
+    for p in j["points"].as_array().into_iter().flatten() {
+        let _ = writeln!(
+            page,
+            "| {} | {} | {} | {} | {} | {} | {} |",
+            p["triangles"],
+            p["structure"].as_str().unwrap_or("?"),
+            sig(f(&p["build_ns_per_triangle"])),
+            sig(f(&p["trace_ns_per_ray"])),
+            sig(f(&p["bytes_per_triangle"])),
+            p["peak_build_bytes"]
+                .as_f64()
+                .map_or("n/a".into(), |b| sig(b / (1024.0 * 1024.0))),
+            sig(f(&p["scratch_ratio"])),
+        );
+    }
+}
+
+/// An `animate --json` run as a table: per row and strategy, the update and trace time and the
+/// SAH cost of the first, second and last frames.
+fn animate_table(page: &mut String, run: &Run) {
+    let j = &run.json;
+    let _ = writeln!(
+        page,
+        "\n`{}` ({}, {} triangles, {} threads, {} checked rays per frame, 0 mismatches)\n\n| structure | strategy | frame | update ms | trace ms | SAH cost |\n| --- | --- | ---: | ---: | ---: | ---: |",
+        run.command,
+        j["animation"].as_str().unwrap_or("?"),
+        j["triangles"],
+        j["threads"],
+        j["checked"],
+    );
+    for t in j["tracks"].as_array().into_iter().flatten() {
+        let frames = t["frames"].as_array().cloned().unwrap_or_default();
+        let last = frames.len().saturating_sub(1);
+        for (i, fr) in frames.iter().enumerate() {
+            if i > 1 && i != last {
+                continue;
+            }
+            let _ = writeln!(
+                page,
+                "| {} | {} | {} | {} | {} | {} |",
+                t["structure"].as_str().unwrap_or("?"),
+                t["strategy"].as_str().unwrap_or("?"),
+                fr["frame"],
+                sig(f(&fr["update_ms"])),
+                sig(f(&fr["trace_ms"])),
+                sig(f(&fr["sah"])),
+            );
+        }
+    }
+}
+
+/// rt-bvh against Embree 3: the peers benchmark's own tables.
+fn embree() -> Result<String, String> {
+    let command = "cargo bench -p rt-benches --features embree --bench peers";
+    eprintln!("{command}");
+    let out = Command::new("cargo")
+        .args([
+            "bench",
+            "-p",
+            "rt-benches",
+            "--features",
+            "embree",
+            "--bench",
+            "peers",
+        ])
+        .output()
+        .map_err(|e| format!("{command}: cannot run: {e}"))?;
+    if !out.status.success() {
+        let err = String::from_utf8_lossy(&out.stderr);
+        let last = err
+            .lines()
+            .rev()
+            .find(|l| !l.trim().is_empty())
+            .unwrap_or("");
+        return Err(format!("{command} failed ({}): {last}", out.status));
+    }
+    Ok(format!(
+        "\n## rt-bvh against Embree 3\n\n`{command}`: rt-bvh's presets and Embree 3 on the same \
+         triangles and the same rays, traced on one thread, passes interleaved, medians. Its \
+         primary rays come from the scenes' own cameras, whose images these meshes do not fill \
+         (see the hit shares of the primary-ray tables above): for the many rays that leave the \
+         box early it times the cost of a call rather than of a traversal, so judge the \
+         primary-ray ratio with that in mind.\n\n{}",
+        String::from_utf8_lossy(&out.stdout)
+    ))
+}

@@ -1,0 +1,349 @@
+//! The README and the guide stay true: every command they show in a `sh` block runs as shown
+//! (or, for `cargo` commands that build benchmarks and examples, names targets that exist),
+//! every relative link points at a file (and heading) that exists, and the README stays a front
+//! page. The guide's Rust examples are compiled and run as doctests of `rt-shootout`.
+//!
+//! Conventions the guide follows so that this test can run it:
+//! - a command is one line of a ```` ```sh ```` block (a `\` continues it), from the
+//!   repository root; `# exits N` after it says the status it must exit with (default 0);
+//! - `-o`/`--out` paths are redirected into a scratch folder, so a run writes nothing into the
+//!   repository;
+//! - a command `.ci/run` runs itself (`cargo xtask compare`, `cargo test --workspace`) is left
+//!   to CI.
+
+use std::collections::BTreeSet;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// The repository root.
+fn root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("..")
+}
+
+/// The README and every guide page but the generated results page.
+fn guide_pages() -> Vec<PathBuf> {
+    let mut pages = vec![root().join("README.md")];
+    let mut docs: Vec<PathBuf> = std::fs::read_dir(root().join("docs"))
+        .expect("docs/")
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .filter(|p| !p.ends_with("results.md"))
+        .collect();
+    docs.sort();
+    pages.extend(docs);
+    pages
+}
+
+/// One shown command: where, the words, and the exit status it must end with.
+#[derive(Debug)]
+struct Shown {
+    page: String,
+    words: Vec<String>,
+    status: i32,
+}
+
+/// The commands of a page's `sh` blocks.
+fn commands(page: &Path) -> Vec<Shown> {
+    let text = std::fs::read_to_string(page).unwrap();
+    let name = page.file_name().unwrap().to_string_lossy().into_owned();
+    let mut out = Vec::new();
+    let mut in_sh = false;
+    let mut pending = String::new();
+    for line in text.lines() {
+        if line.starts_with("```") {
+            in_sh = line.trim() == "```sh";
+            continue;
+        }
+        if !in_sh {
+            continue;
+        }
+        if let Some(head) = line.strip_suffix('\\') {
+            pending += head;
+            continue;
+        }
+        let full = std::mem::take(&mut pending) + line;
+        let (command, comment) = full.split_once('#').unwrap_or((&full, ""));
+        if command.trim().is_empty() {
+            continue;
+        }
+        let status = comment
+            .trim()
+            .strip_prefix("exits ")
+            .and_then(|s| s.split(|c: char| !c.is_ascii_digit()).next())
+            .and_then(|s| s.parse().ok())
+            .unwrap_or(0);
+        out.push(Shown {
+            page: name.clone(),
+            words: command.split_whitespace().map(String::from).collect(),
+            status,
+        });
+    }
+    out
+}
+
+/// The lines `.ci/run` runs itself.
+fn ci_commands() -> BTreeSet<String> {
+    std::fs::read_to_string(root().join(".ci/run"))
+        .unwrap()
+        .lines()
+        .map(|l| l.trim().to_owned())
+        .collect()
+}
+
+/// Runs `cargo xtask ARGS` as shown, from the repository root, with its output files in
+/// `scratch`; returns a failure message, if any.
+fn run_xtask(shown: &Shown, scratch: &Path) -> Option<String> {
+    let mut args: Vec<String> = shown.words[2..].to_vec();
+    for i in 0..args.len() {
+        if (args[i] == "-o" || args[i] == "--out") && i + 1 < args.len() {
+            let name = Path::new(&args[i + 1]).file_name().unwrap().to_owned();
+            args[i + 1] = scratch.join(name).to_string_lossy().into_owned();
+        }
+    }
+    let out = Command::new(env!("CARGO_BIN_EXE_xtask"))
+        .args(&args)
+        .current_dir(root())
+        .output()
+        .expect("xtask runs");
+    (out.status.code() != Some(shown.status)).then(|| {
+        format!(
+            "{}: `{}` exited with {:?}, not {}: {}",
+            shown.page,
+            shown.words.join(" "),
+            out.status.code(),
+            shown.status,
+            String::from_utf8_lossy(&out.stderr)
+                .lines()
+                .last()
+                .unwrap_or("")
+        )
+    })
+}
+
+/// Every package of the repository (the workspace and the labs), by name, with its folder.
+fn packages() -> Vec<(String, PathBuf)> {
+    let mut found = Vec::new();
+    let mut stack = vec![root()];
+    while let Some(dir) = stack.pop() {
+        for entry in std::fs::read_dir(&dir).unwrap() {
+            let path = entry.unwrap().path();
+            let skip = path
+                .file_name()
+                .is_some_and(|n| n == "target" || n.to_string_lossy().starts_with('.'));
+            if path.is_dir() && !skip {
+                stack.push(path);
+            } else if path.ends_with("Cargo.toml") {
+                let text = std::fs::read_to_string(&path).unwrap();
+                if let Some(name) = text
+                    .lines()
+                    .find_map(|l| l.strip_prefix("name = \""))
+                    .and_then(|l| l.strip_suffix('"'))
+                {
+                    found.push((name.to_owned(), dir.clone()));
+                }
+            }
+        }
+    }
+    found
+}
+
+/// Checks a `cargo run`, `cargo bench` or `cargo test` line without running it (they build
+/// benchmarks or the whole suite): its package, example, bench and features exist.
+fn check_cargo(shown: &Shown, cwd: &Path, packages: &[(String, PathBuf)]) -> Option<String> {
+    let w = &shown.words;
+    let value = |flag: &str| w.iter().position(|x| x == flag).and_then(|i| w.get(i + 1));
+    let dir = match value("-p") {
+        Some(p) => match packages.iter().find(|(n, _)| n == p) {
+            Some((_, d)) => d.clone(),
+            None => return Some(format!("{}: no package {p}", shown.page)),
+        },
+        None => cwd.to_path_buf(),
+    };
+    let manifest = std::fs::read_to_string(dir.join("Cargo.toml")).unwrap_or_default();
+    let exists = |kind: &str, name: &str| {
+        dir.join(format!("{kind}/{name}.rs")).is_file()
+            || dir.join(format!("{kind}/{name}/main.rs")).is_file()
+            || manifest.contains(&format!("name = \"{name}\""))
+    };
+    if let Some(example) = value("--example").filter(|e| !exists("examples", e)) {
+        return Some(format!(
+            "{}: no example {example} in {}",
+            shown.page,
+            dir.display()
+        ));
+    }
+    if let Some(bench) = value("--bench").filter(|b| !exists("benches", b)) {
+        return Some(format!(
+            "{}: no bench {bench} in {}",
+            shown.page,
+            dir.display()
+        ));
+    }
+    if let Some(feature) = value("--features").filter(|f| !manifest.contains(&format!("\n{f} "))) {
+        return Some(format!(
+            "{}: no feature {feature} in {}",
+            shown.page,
+            dir.display()
+        ));
+    }
+    None
+}
+
+/// Checks or runs one shown command; a failure message, if any.
+fn check(
+    shown: &Shown,
+    scratch: &Path,
+    packages: &[(String, PathBuf)],
+    ci: &BTreeSet<String>,
+) -> Option<String> {
+    let line = shown.words.join(" ");
+    if ci.contains(&line) {
+        return None;
+    }
+    let mut cwd = root();
+    let mut words: &[String] = &shown.words;
+    if words.first().is_some_and(|w| w == "cd") && words.get(2).is_some_and(|w| w == "&&") {
+        cwd = root().join(&words[1]);
+        if !cwd.join("Cargo.toml").is_file() {
+            return Some(format!(
+                "{}: `{line}`: no crate in {}",
+                shown.page, words[1]
+            ));
+        }
+        words = &words[3..];
+    }
+    let rest = Shown {
+        page: shown.page.clone(),
+        words: words.to_vec(),
+        status: shown.status,
+    };
+    match words.iter().map(String::as_str).take(2).collect::<Vec<_>>()[..] {
+        ["cargo", "xtask"] => run_xtask(&rest, scratch),
+        ["cargo", "run" | "bench" | "test" | "build"] => check_cargo(&rest, &cwd, packages),
+        _ => Some(format!(
+            "{}: `{line}` is neither a cargo xtask nor a cargo run/bench/test command",
+            shown.page
+        )),
+    }
+}
+
+#[test]
+fn every_shown_command_runs() {
+    let scratch = Path::new(env!("CARGO_TARGET_TMPDIR")).join("docs-commands");
+    std::fs::create_dir_all(&scratch).unwrap();
+    let shown: Vec<Shown> = guide_pages().iter().flat_map(|p| commands(p)).collect();
+    assert!(shown.len() > 20, "{shown:?}");
+    let (packages, ci) = (packages(), ci_commands());
+    // Two at a time: most of the time goes to the xtask runs, each mostly single-threaded.
+    let next = std::sync::atomic::AtomicUsize::new(0);
+    let failures = std::sync::Mutex::new(Vec::new());
+    std::thread::scope(|s| {
+        for _ in 0..2 {
+            s.spawn(|| {
+                loop {
+                    let i = next.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
+                    let Some(cmd) = shown.get(i) else { break };
+                    if let Some(f) = check(cmd, &scratch, &packages, &ci) {
+                        failures.lock().unwrap().push(f);
+                    }
+                }
+            });
+        }
+    });
+    let failures = failures.into_inner().unwrap();
+    assert!(failures.is_empty(), "{}", failures.join("\n"));
+    std::fs::remove_dir_all(&scratch).ok();
+}
+
+/// The anchor GitHub gives a heading: lower case, spaces to hyphens, other punctuation dropped.
+fn slug(heading: &str) -> String {
+    heading
+        .trim()
+        .to_lowercase()
+        .chars()
+        .filter_map(|c| match c {
+            ' ' => Some('-'),
+            c if c.is_alphanumeric() || c == '-' || c == '_' => Some(c),
+            _ => None,
+        })
+        .collect()
+}
+
+/// Every Markdown file of the repository that a reader follows links in.
+fn linked_pages() -> Vec<PathBuf> {
+    let mut pages = guide_pages();
+    pages.push(root().join("docs/results.md"));
+    for extra in ["ARCHITECTURE.md", "labs/README.md", "fuzz/README.md"] {
+        pages.push(root().join(extra));
+    }
+    for entry in std::fs::read_dir(root().join("crates")).unwrap() {
+        let readme = entry.unwrap().path().join("README.md");
+        if readme.is_file() {
+            pages.push(readme);
+        }
+    }
+    pages
+}
+
+#[test]
+fn every_relative_link_resolves() {
+    let mut broken = Vec::new();
+    for page in linked_pages() {
+        let Ok(text) = std::fs::read_to_string(&page) else {
+            broken.push(format!("{} is missing", page.display()));
+            continue;
+        };
+        for (i, _) in text.match_indices("](") {
+            let rest = &text[i + 2..];
+            let Some(end) = rest.find(')') else { continue };
+            let target = &rest[..end];
+            if target.contains("://") || target.starts_with('#') || target.contains(' ') {
+                continue;
+            }
+            let (file, anchor) = target.split_once('#').unwrap_or((target, ""));
+            let path = page.parent().unwrap().join(file);
+            if !path.exists() {
+                broken.push(format!("{}: {target}", page.display()));
+            } else if !anchor.is_empty() {
+                let headings: Vec<String> = std::fs::read_to_string(&path)
+                    .unwrap_or_default()
+                    .lines()
+                    .filter_map(|l| l.strip_prefix('#'))
+                    .map(|l| slug(l.trim_start_matches('#')))
+                    .collect();
+                if !headings.iter().any(|h| h == anchor) {
+                    broken.push(format!("{}: {target} (no such heading)", page.display()));
+                }
+            }
+        }
+    }
+    assert!(broken.is_empty(), "broken links:\n{}", broken.join("\n"));
+}
+
+#[test]
+fn the_readme_is_a_front_page() {
+    let readme = std::fs::read_to_string(root().join("README.md")).unwrap();
+    assert!(
+        readme.len() < 15 * 1024,
+        "README.md is {} bytes",
+        readme.len()
+    );
+    // The two set-up commands, exactly as `.ci/run` runs them.
+    let ci = ci_commands();
+    for command in ["cargo xtask compare", "cargo test --workspace"] {
+        assert!(readme.contains(&format!("{command} ")), "{command}");
+        assert!(ci.contains(command), ".ci/run does not run `{command}`");
+    }
+}
+
+#[test]
+fn the_slug_rule_matches_github() {
+    assert_eq!(
+        slug(" Where the meshes come from"),
+        "where-the-meshes-come-from"
+    );
+    assert_eq!(
+        slug(" Dynamic scenes: `cargo xtask animate`"),
+        "dynamic-scenes-cargo-xtask-animate"
+    );
+}

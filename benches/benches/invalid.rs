@@ -11,7 +11,8 @@
 use rt_benches::{flag_values, scenes};
 use rt_core::Ray;
 use rt_core::glam::Vec3;
-use rt_shootout::structures::{self, Query, Traceable};
+use rt_core::{DynAccel, Triangle};
+use rt_shootout::structures::{self, Query};
 use std::hint::black_box;
 use std::process::ExitCode;
 use std::time::Instant;
@@ -38,9 +39,9 @@ fn invalid(rays: &[Ray]) -> Vec<Ray> {
 }
 
 /// Nanoseconds per ray of one single-threaded pass.
-fn pass(s: &dyn Traceable, rays: &[Ray]) -> f64 {
+fn pass(s: &dyn DynAccel<Triangle>, rays: &[Ray]) -> f64 {
     let start = Instant::now();
-    black_box(s.trace_timed(black_box(rays), Query::Closest));
+    black_box(structures::trace_timed(s, black_box(rays), Query::Closest));
     start.elapsed().as_nanos() as f64 / rays.len() as f64
 }
 

@@ -13,12 +13,16 @@
 //! compared with the BVH's: the run panics if any byte differs.
 
 use rt_bvh::Bvh;
-use rt_core::{Accel, Counters, Hit, Ray, Shape};
+use rt_core::glam::Vec3;
+use rt_core::{
+    Aabb, Accel, BallQuery, BuildStats, Counters, DynAccel, Hit, PointHit, Ray, Region, Shape,
+    Trace,
+};
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
 use rt_kdtree::KdTree;
 use rt_octree::Octree;
-use rt_render::{Image, RenderOptions, RenderScene, Tracer, render};
+use rt_render::{Image, RenderOptions, RenderScene, render};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
@@ -56,30 +60,68 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// Counts the queries a render makes (only in the untimed pass: the shared counters would
-/// slow the timed ones).
+/// slow the timed ones). The renderer makes single queries only, so the others forward as they
+/// are.
 struct Counting<'a> {
-    inner: &'a dyn Tracer,
+    inner: &'a dyn DynAccel<Shape>,
     closest: AtomicU64,
     any: AtomicU64,
 }
 
-impl Tracer for Counting<'_> {
-    fn closest_hit(&self, ray: &Ray) -> Option<Hit> {
+impl DynAccel<Shape> for Counting<'_> {
+    fn name(&self) -> &'static str {
+        self.inner.name()
+    }
+    fn bounds_dyn(&self) -> Aabb {
+        self.inner.bounds_dyn()
+    }
+    fn memory_bytes_dyn(&self) -> usize {
+        self.inner.memory_bytes_dyn()
+    }
+    fn build_stats_dyn(&self) -> BuildStats {
+        self.inner.build_stats_dyn()
+    }
+    fn regions_dyn(&self) -> Vec<Region> {
+        self.inner.regions_dyn()
+    }
+    fn intersect_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> Option<Hit> {
         self.closest.fetch_add(1, Ordering::Relaxed);
-        self.inner.closest_hit(ray)
+        self.inner.intersect_dyn(ray, counters)
     }
-    fn any_hit(&self, ray: &Ray) -> bool {
+    fn occluded_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> bool {
         self.any.fetch_add(1, Ordering::Relaxed);
-        self.inner.any_hit(ray)
+        self.inner.occluded_dyn(ray, counters)
     }
-    fn closest_hit_counted(&self, ray: &Ray, counters: &mut Counters) -> Option<Hit> {
-        self.inner.closest_hit_counted(ray, counters)
+    fn ball_query_dyn(&self, query: &mut dyn BallQuery<Shape>, counters: Option<&mut Counters>) {
+        self.inner.ball_query_dyn(query, counters);
+    }
+    fn trace_dyn(&self, ray: &Ray, any: bool) -> (Option<Hit>, Trace) {
+        self.inner.trace_dyn(ray, any)
+    }
+    fn intersect_all(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        counters: Option<&mut Counters>,
+    ) {
+        self.inner.intersect_all(rays, out, counters);
+    }
+    fn occluded_all(&self, rays: &[Ray], out: &mut [bool], counters: Option<&mut Counters>) {
+        self.inner.occluded_all(rays, out, counters);
+    }
+    fn closest_points_all(
+        &self,
+        points: &[(Vec3, f32)],
+        out: &mut [Option<PointHit>],
+        counters: Option<&mut Counters>,
+    ) {
+        self.inner.closest_points_all(points, out, counters);
     }
 }
 
-type Build = fn(&[Shape]) -> Box<dyn Tracer>;
+type Build = fn(&[Shape]) -> Box<dyn DynAccel<Shape>>;
 
-fn boxed<A: Accel<Prim = Shape> + 'static>(shapes: &[Shape]) -> Box<dyn Tracer> {
+fn boxed<A: Accel<Prim = Shape> + 'static>(shapes: &[Shape]) -> Box<dyn DynAccel<Shape>> {
     Box::new(A::build(shapes, &Default::default()))
 }
 
@@ -108,7 +150,8 @@ fn main() {
         o.depth,
         o.passes
     );
-    let picture = |t: &dyn Tracer| render(&scene, &shapes, t, &options, &|_, _| {}).unwrap();
+    let picture =
+        |t: &dyn DynAccel<Shape>| render(&scene, &shapes, t, &options, &|_, _| {}).unwrap();
 
     let mut built = Vec::new();
     for (name, build) in structures {

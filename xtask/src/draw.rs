@@ -114,7 +114,7 @@ pub fn run(args: &Args) -> Result<(), String> {
         .map_or(args.scene.clone(), |n| n.to_string_lossy().into_owned());
     for entry in &entries {
         let built = (entry.build)(&triangles);
-        let regions = built.regions();
+        let regions = built.regions_dyn();
         if regions.is_empty() {
             return Err(format!(
                 "{} does not describe its nodes (Accel::regions), so it cannot be drawn",

@@ -12,7 +12,7 @@
 //! `cargo xtask compare` makes them. The passes of all configurations are interleaved and the
 //! median pass is reported; every configuration must answer exactly like the first.
 
-use rt_bvh::{Bvh, BvhParams, Kernels};
+use rt_bvh::{Ablation, Bvh, BvhParams, Kernels};
 use rt_core::{Accel, Hit, Primitive, Ray, Triangle};
 use rt_scene::raygen::{self, RayKind};
 use rt_scene::scenes;
@@ -22,8 +22,10 @@ use std::time::Instant;
 fn steps() -> Vec<(&'static str, BvhParams)> {
     let wide = |kernels, sort_children, any_hit_path| BvhParams {
         kernels,
-        sort_children,
-        any_hit_path,
+        ablation: Ablation {
+            sort_children,
+            any_hit_path,
+        },
         ..BvhParams::wide()
     };
     vec![

@@ -90,8 +90,8 @@
 //!   primitives, in the wide tree).
 //! - `parallel` (true): build (and refit) large inputs on rayon's threads (with the crate's
 //!   `parallel` feature; without it every build runs on the calling thread).
-//! - `sort_children`, `any_hit_path` (true): switch off the nearest-first order and the any-hit
-//!   path, only to measure what they gain (`cargo run --release -p rt-bvh --example steps`).
+//! - `ablation` ([`Ablation`], measurement only): switch off the nearest-first order or the
+//!   any-hit path, to measure what each gains (`cargo run --release -p rt-bvh --example steps`).
 //!
 //! # Closest points
 //! [`Accel::closest_point`] walks the same tree nearest box first
@@ -180,7 +180,7 @@ mod validate;
 
 pub use instance::Instances;
 pub use node::{ChildRef, Node, PACK, TriPack, WIDTH, WideNode};
-pub use validate::ValidationError;
+pub use rt_core::ValidationError;
 
 use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, Stats, TriangleTest};
 use simd::Isa;
@@ -250,13 +250,31 @@ pub struct BvhParams {
     /// Force the kernels of a wide tree; `None`, or kernels this CPU cannot run, picks the
     /// fastest it runs.
     pub kernels: Option<Kernels>,
-    /// Wide tree, closest hit: visit the children a ray enters nearest first (sorted by entry
-    /// distance). `false` visits them in lane order: only there to measure what sorting gains.
+    /// Measurement only: switches that turn off optimisations of the wide traversal to measure
+    /// what each gains. Leave it at its default.
+    pub ablation: Ablation,
+}
+
+/// Measurement only: switches that turn off one optimisation of the wide traversal each, so that
+/// `cargo run --release -p rt-bvh --example steps` can measure what it gains. Turning one off is
+/// never faster; the default (both on) is what every user wants.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Ablation {
+    /// Closest hit: visit the children a ray enters nearest first (sorted by entry distance).
+    /// `false` visits them in lane order.
     pub sort_children: bool,
-    /// Wide tree, any hit: the dedicated path (children in lane order, no sorting, stop at the
-    /// first hit). `false` answers occlusion with the closest-hit traversal: only there to
-    /// measure what the dedicated path gains.
+    /// Any hit: the dedicated path (children in lane order, no sorting, stop at the first hit).
+    /// `false` answers occlusion with the closest-hit traversal.
     pub any_hit_path: bool,
+}
+
+impl Default for Ablation {
+    fn default() -> Self {
+        Self {
+            sort_children: true,
+            any_hit_path: true,
+        }
+    }
 }
 
 impl BvhParams {
@@ -271,8 +289,7 @@ impl BvhParams {
             max_leaf_size: 8,
             parallel: true,
             kernels: None,
-            sort_children: true,
-            any_hit_path: true,
+            ablation: Ablation::default(),
         }
     }
 
@@ -313,17 +330,8 @@ impl Default for BvhParams {
 /// A bounding volume hierarchy over primitives of type `P`. See the [crate documentation](crate).
 #[derive(Clone, Debug)]
 pub struct Bvh<P: Primitive> {
-    layout: Layout,
-    binary: Vec<Node>,
-    wide: Vec<WideNode>,
-    packs: Vec<TriPack>,
-    test: Option<TriangleTest>,
-    prims: Vec<P>,
-    ids: Vec<u32>,
-    kernels: Kernels,
-    isa: Isa,
-    sort_children: bool,
-    any_hit_path: bool,
+    /// The nodes and leaves, in the one layout the tree was built with.
+    tree: Tree<P>,
     max_depth: usize,
     leaves: usize,
     valid: usize,
@@ -336,6 +344,50 @@ pub struct Bvh<P: Primitive> {
     parallel: bool,
     /// [`Bvh::sah_cost`] when the tree was built.
     built_cost: f64,
+}
+
+/// A tree in its layout: binary or wide, never both.
+#[derive(Clone, Debug)]
+enum Tree<P> {
+    /// Two children per node; the leaves' primitives in leaf order.
+    Binary { nodes: Vec<Node>, items: Items<P> },
+    /// Up to eight children per node.
+    Wide(Wide<P>),
+}
+
+/// The wide tree, with the kernels that trace it.
+#[derive(Clone, Debug)]
+struct Wide<P> {
+    nodes: Vec<WideNode>,
+    leaves: Leaves<P>,
+    kernels: Kernels,
+    isa: Isa,
+    ablation: Ablation,
+}
+
+/// What a wide tree's leaves hold.
+#[derive(Clone, Debug)]
+enum Leaves<P> {
+    /// Packs of four triangles, all with one test: every valid primitive is such a triangle.
+    Packs {
+        packs: Vec<TriPack>,
+        test: TriangleTest,
+    },
+    /// Primitives one at a time.
+    Items(Items<P>),
+}
+
+/// Primitives in leaf order, each with its index in the build input.
+#[derive(Clone, Debug)]
+pub(crate) struct Items<P> {
+    pub(crate) prims: Vec<P>,
+    pub(crate) ids: Vec<u32>,
+}
+
+impl<P> Items<P> {
+    fn memory_bytes(&self) -> usize {
+        self.prims.capacity() * size_of::<P>() + self.ids.capacity() * size_of::<u32>()
+    }
 }
 
 /// The primitives of the build input the tree does not store, so that a refit can check they
@@ -353,54 +405,90 @@ struct Input {
 impl<P: Primitive> Bvh<P> {
     /// The layout this tree was built with.
     pub fn layout(&self) -> Layout {
-        self.layout
+        match self.tree {
+            Tree::Binary { .. } => Layout::Binary,
+            Tree::Wide(_) => Layout::Wide,
+        }
     }
 
     /// The binary tree's nodes, root first, in depth-first order (empty for the wide layout).
     pub fn nodes(&self) -> &[Node] {
-        &self.binary
+        match &self.tree {
+            Tree::Binary { nodes, .. } => nodes,
+            Tree::Wide(_) => &[],
+        }
     }
 
     /// The wide tree's nodes, root first (empty for the binary layout and for an empty tree).
     pub fn wide_nodes(&self) -> &[WideNode] {
-        &self.wide
+        match &self.tree {
+            Tree::Binary { .. } => &[],
+            Tree::Wide(w) => &w.nodes,
+        }
     }
 
     /// The wide tree's triangle packs, which its leaves index (empty unless the tree is wide
     /// and every valid primitive is a triangle with one test; see
     /// [`Primitive::as_triangle`]).
     pub fn packs(&self) -> &[TriPack] {
-        &self.packs
+        match &self.tree {
+            Tree::Wide(Wide {
+                leaves: Leaves::Packs { packs, .. },
+                ..
+            }) => packs,
+            _ => &[],
+        }
     }
 
     /// The test of the [`packs`](Bvh::packs), if the leaves are packed.
     pub fn pack_test(&self) -> Option<TriangleTest> {
-        self.test
+        match &self.tree {
+            Tree::Wide(Wide {
+                leaves: Leaves::Packs { test, .. },
+                ..
+            }) => Some(*test),
+            _ => None,
+        }
+    }
+
+    /// The leaves' primitives and their input indices, unless the leaves are triangle packs.
+    fn items(&self) -> Option<&Items<P>> {
+        match &self.tree {
+            Tree::Binary { items, .. }
+            | Tree::Wide(Wide {
+                leaves: Leaves::Items(items),
+                ..
+            }) => Some(items),
+            Tree::Wide(_) => None,
+        }
     }
 
     /// The kept primitives, reordered so each leaf's are contiguous (empty when the leaves are
     /// triangle packs).
     pub fn primitives(&self) -> &[P] {
-        &self.prims
+        self.items().map_or(&[], |i| &i.prims)
     }
 
     /// For each slot of [`primitives`](Bvh::primitives), its index in the build input.
     pub fn primitive_ids(&self) -> &[u32] {
-        &self.ids
+        self.items().map_or(&[], |i| &i.ids)
     }
 
     /// The kernels that trace this tree (always [`Kernels::Portable`] for the binary layout,
     /// whose traversal is scalar).
     pub fn kernels(&self) -> Kernels {
-        self.kernels
+        match &self.tree {
+            Tree::Binary { .. } => Kernels::Portable,
+            Tree::Wide(w) => w.kernels,
+        }
     }
 
     /// Chooses the kernels that trace a wide tree. Returns `false`, changing nothing, when this
     /// CPU cannot run them (AVX2 without AVX2 and FMA) or the tree is binary.
     pub fn set_kernels(&mut self, kernels: Kernels) -> bool {
-        if self.layout == Layout::Binary {
+        let Tree::Wide(wide) = &mut self.tree else {
             return kernels == Kernels::Portable;
-        }
+        };
         let isa = match kernels {
             Kernels::Avx2 => Isa::avx2(),
             Kernels::Sse2 => Isa::sse2(),
@@ -409,8 +497,8 @@ impl<P: Primitive> Bvh<P> {
         let Some(isa) = isa else {
             return false;
         };
-        self.kernels = kernels;
-        self.isa = isa;
+        wide.kernels = kernels;
+        wide.isa = isa;
         true
     }
 
@@ -421,52 +509,65 @@ impl<P: Primitive> Bvh<P> {
         if !ray.is_valid() {
             return None;
         }
-        match self.layout {
-            Layout::Binary => self.traverse_binary::<S, ANY>(ray, stats),
-            Layout::Wide if self.wide.is_empty() => None,
+        match &self.tree {
+            Tree::Binary { nodes, items } => {
+                traverse::binary::<P, S, ANY>(nodes, items, ray, stats)
+            }
+            Tree::Wide(w) if w.nodes.is_empty() => None,
             // Occlusion through the closest-hit traversal: only to measure the any-hit path.
-            Layout::Wide if ANY && !self.any_hit_path => self.wide::<S, false>(ray, stats),
-            Layout::Wide => self.wide::<S, ANY>(ray, stats),
+            Tree::Wide(w) if ANY && !w.ablation.any_hit_path => w.walk::<S, false>(ray, stats),
+            Tree::Wide(w) => w.walk::<S, ANY>(ray, stats),
         }
     }
+}
 
+impl<P: Primitive> Wide<P> {
     /// The wide traversal with this tree's leaves, kernels and child ordering.
     #[inline(always)]
-    fn wide<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        if self.sort_children {
-            self.wide_with::<S, ANY, true>(ray, stats)
+    fn walk<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        if self.ablation.sort_children {
+            self.walk_with::<S, ANY, true>(ray, stats)
         } else {
-            self.wide_with::<S, ANY, false>(ray, stats)
+            self.walk_with::<S, ANY, false>(ray, stats)
         }
     }
 
     #[inline(always)]
-    fn wide_with<S: Stats, const ANY: bool, const SORT: bool>(
+    fn walk_with<S: Stats, const ANY: bool, const SORT: bool>(
         &self,
         ray: &Ray,
         stats: &mut S,
     ) -> Option<Hit> {
-        let (nodes, isa) = (&self.wide[..], self.isa);
-        match (self.test, self.kernels) {
-            (Some(test), Kernels::Scalar) => {
-                let leaves = ScalarPacks {
-                    packs: &self.packs,
-                    test,
-                };
+        let (nodes, isa) = (&self.nodes[..], self.isa);
+        match (&self.leaves, self.kernels) {
+            (Leaves::Packs { packs, test }, Kernels::Scalar) => {
+                let leaves = ScalarPacks { packs, test: *test };
                 simd::dispatch::<_, S, ANY, SORT>(isa, nodes, &leaves, ray, stats)
             }
-            (Some(TriangleTest::Watertight), _) => {
-                let leaves = Packs::<false> { packs: &self.packs };
+            (
+                Leaves::Packs {
+                    packs,
+                    test: TriangleTest::Watertight,
+                },
+                _,
+            ) => {
+                let leaves = Packs::<false> { packs };
                 simd::dispatch::<_, S, ANY, SORT>(isa, nodes, &leaves, ray, stats)
             }
-            (Some(TriangleTest::MollerTrumbore), _) => {
-                let leaves = Packs::<true> { packs: &self.packs };
+            (
+                Leaves::Packs {
+                    packs,
+                    test: TriangleTest::MollerTrumbore,
+                },
+                _,
+            ) => {
+                let leaves = Packs::<true> { packs };
                 simd::dispatch::<_, S, ANY, SORT>(isa, nodes, &leaves, ray, stats)
             }
-            (None, _) => {
+            (Leaves::Items(items), _) => {
                 let leaves = Prims {
-                    prims: &self.prims,
-                    ids: &self.ids,
+                    prims: &items.prims,
+                    ids: &items.ids,
                 };
                 simd::dispatch::<_, S, ANY, SORT>(isa, nodes, &leaves, ray, stats)
             }
@@ -500,18 +601,31 @@ impl<P: Primitive> Accel for Bvh<P> {
         params: &BvhParams,
     ) -> Self {
         let b = builder::build(geometry, params);
-        let mut bvh = Self {
-            layout: params.layout,
-            binary: b.binary,
-            wide: b.wide,
-            packs: b.packs,
-            test: b.test,
+        let items = Items {
             prims: b.prims,
             ids: b.ids,
-            kernels: Kernels::Portable,
-            isa: Isa::Portable,
-            sort_children: params.sort_children,
-            any_hit_path: params.any_hit_path,
+        };
+        let tree = match params.layout {
+            Layout::Binary => Tree::Binary {
+                nodes: b.binary,
+                items,
+            },
+            Layout::Wide => Tree::Wide(Wide {
+                nodes: b.wide,
+                leaves: match b.test {
+                    Some(test) => Leaves::Packs {
+                        packs: b.packs,
+                        test,
+                    },
+                    None => Leaves::Items(items),
+                },
+                kernels: Kernels::Portable,
+                isa: Isa::Portable,
+                ablation: params.ablation,
+            }),
+        };
+        let mut bvh = Self {
+            tree,
             max_depth: b.max_depth,
             leaves: b.leaves,
             valid: b.valid,
@@ -523,7 +637,7 @@ impl<P: Primitive> Accel for Bvh<P> {
         };
         bvh.input = refit::left_out(&bvh, geometry);
         bvh.built_cost = bvh.sah_cost();
-        if params.layout == Layout::Wide {
+        if bvh.layout() == Layout::Wide {
             // The kernels asked for, else the fastest this CPU runs.
             let chosen = params.kernels.is_some_and(|k| bvh.set_kernels(k));
             if !chosen {
@@ -551,19 +665,27 @@ impl<P: Primitive> Accel for Bvh<P> {
 
     /// Nearest box first, pruned by the query's radius (`nearest.rs`).
     fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
-        match self.layout {
+        match self.layout() {
             Layout::Binary => self.ball_binary(query, stats),
             Layout::Wide => self.ball_wide(query, stats),
         }
     }
 
     fn memory_bytes(&self) -> usize {
+        let tree = match &self.tree {
+            Tree::Binary { nodes, items } => {
+                nodes.capacity() * size_of::<Node>() + items.memory_bytes()
+            }
+            Tree::Wide(w) => {
+                w.nodes.capacity() * size_of::<WideNode>()
+                    + match &w.leaves {
+                        Leaves::Packs { packs, .. } => packs.capacity() * size_of::<TriPack>(),
+                        Leaves::Items(items) => items.memory_bytes(),
+                    }
+            }
+        };
         size_of::<Self>()
-            + self.binary.capacity() * size_of::<Node>()
-            + self.wide.capacity() * size_of::<WideNode>()
-            + self.packs.capacity() * size_of::<TriPack>()
-            + self.prims.capacity() * size_of::<P>()
-            + self.ids.capacity() * size_of::<u32>()
+            + tree
             + self.input.invalid.capacity() * size_of::<u32>()
             + self.input.copies.capacity() * size_of::<(u32, u32)>()
     }
@@ -573,15 +695,15 @@ impl<P: Primitive> Accel for Bvh<P> {
     }
 
     fn build_stats(&self) -> BuildStats {
-        let nodes = match self.layout {
+        let nodes = match self.layout() {
             Layout::Binary if self.valid == 0 => 0,
-            Layout::Binary => self.binary.len(),
-            Layout::Wide => self.wide.len() + self.leaves,
+            Layout::Binary => self.nodes().len(),
+            Layout::Wide => self.wide_nodes().len() + self.leaves,
         };
         let mut extra = Vec::new();
-        if self.layout == Layout::Wide {
-            extra.push(("wide nodes", self.wide.len() as f64));
-            extra.push(("triangle packs", self.packs.len() as f64));
+        if self.layout() == Layout::Wide {
+            extra.push(("wide nodes", self.wide_nodes().len() as f64));
+            extra.push(("triangle packs", self.packs().len() as f64));
         }
         BuildStats {
             nodes,

@@ -10,10 +10,10 @@ use rt_core::{Aabb, BallQuery, Primitive, Stats, TriangleTest};
 impl<P: Primitive> Bvh<P> {
     /// The box around everything in the tree.
     pub(crate) fn root_bounds(&self) -> Aabb {
-        if let Some(root) = self.binary.first() {
+        if let Some(root) = self.nodes().first() {
             return root.bounds;
         }
-        self.wide.first().map_or(Aabb::EMPTY, |root| {
+        self.wide_nodes().first().map_or(Aabb::EMPTY, |root| {
             (0..WIDTH)
                 .filter(|&i| root.child(i) != ChildRef::EMPTY)
                 .fold(Aabb::EMPTY, |b, i| b.union(root.child_bounds(i)))
@@ -24,9 +24,9 @@ impl<P: Primitive> Bvh<P> {
     /// centre is visited next and the other pushed with its distance; a popped entry is skipped
     /// when the ball has shrunk below it. One stack entry per level, as for rays.
     pub(crate) fn ball_binary<Q: BallQuery<P>, S: Stats>(&self, q: &mut Q, stats: &mut S) {
-        let nodes = &self.binary[..];
+        let nodes = self.nodes();
         let c = q.center();
-        if self.ids.is_empty() || nodes[0].bounds.distance_squared(c) > q.radius_sq() {
+        if self.primitive_ids().is_empty() || nodes[0].bounds.distance_squared(c) > q.radius_sq() {
             return;
         }
         let mut stack = [(0u32, 0.0f32); MAX_DEPTH];
@@ -37,7 +37,10 @@ impl<P: Primitive> Bvh<P> {
             let node = &nodes[current];
             if node.is_leaf() {
                 let range = node.prim_range();
-                for (prim, &id) in self.prims[range.clone()].iter().zip(&self.ids[range]) {
+                for (prim, &id) in self.primitives()[range.clone()]
+                    .iter()
+                    .zip(&self.primitive_ids()[range])
+                {
                     stats.prim_test();
                     q.test(prim, id);
                 }
@@ -80,7 +83,7 @@ impl<P: Primitive> Bvh<P> {
     /// skipped when popped if the ball has shrunk below it. Triangle packs are offered lane by
     /// lane as the triangles they store.
     pub(crate) fn ball_wide<Q: BallQuery<P>, S: Stats>(&self, q: &mut Q, stats: &mut S) {
-        let nodes = &self.wide[..];
+        let nodes = self.wide_nodes();
         let c = q.center();
         if nodes.is_empty() {
             return;
@@ -136,14 +139,17 @@ impl<P: Primitive> Bvh<P> {
         q: &mut Q,
         stats: &mut S,
     ) {
-        let Some(test) = self.test.filter(|_| !self.packs.is_empty()) else {
-            for (prim, &id) in self.prims[items.clone()].iter().zip(&self.ids[items]) {
+        let Some(test) = self.pack_test().filter(|_| !self.packs().is_empty()) else {
+            for (prim, &id) in self.primitives()[items.clone()]
+                .iter()
+                .zip(&self.primitive_ids()[items])
+            {
                 stats.prim_test();
                 q.test(prim, id);
             }
             return;
         };
-        for pack in &self.packs[items] {
+        for pack in &self.packs()[items] {
             for lane in 0..pack.len() {
                 stats.prim_test();
                 let row = |k: usize| {

@@ -2,8 +2,8 @@
 //! ([`Refit`]), and the SAH cost that tells when the refitted tree has drifted far enough from
 //! a fresh build's to rebuild.
 
-use crate::node::{ChildRef, TriPack, WIDTH, WideNode};
-use crate::{Bvh, Input, Layout, PACK};
+use crate::node::{ChildRef, Node, TriPack, WIDTH, WideNode};
+use crate::{Bvh, Input, Items, Layout, Leaves, PACK, Tree, Wide};
 use rt_core::glam::Vec3;
 use rt_core::par;
 use rt_core::{Aabb, Geometry, Primitive, Refit, RefitError, Triangle, TriangleTest};
@@ -69,15 +69,15 @@ pub(crate) fn left_out<P: Primitive, G: Geometry<Prim = P> + ?Sized>(
 impl<P: Primitive> Bvh<P> {
     /// Calls `f` with the input index of every primitive the tree stores.
     fn for_each_stored(&self, mut f: impl FnMut(u32)) {
-        if self.test.is_some() {
-            for pack in &self.packs {
+        if self.pack_test().is_some() {
+            for pack in self.packs() {
                 pack.ids
                     .iter()
                     .filter(|&&id| id != u32::MAX)
                     .for_each(|&id| f(id));
             }
         } else {
-            self.ids.iter().for_each(|&id| f(id));
+            self.primitive_ids().iter().for_each(|&id| f(id));
         }
     }
 
@@ -110,9 +110,9 @@ impl<P: Primitive> Bvh<P> {
         }
         let (traversal, intersection) = (self.costs.0 as f64, self.costs.1 as f64);
         let p = |b: &Aabb| (b.surface_area() as f64 / area).clamp(0.0, 1.0);
-        match self.layout {
+        match self.layout() {
             Layout::Binary => self
-                .binary
+                .nodes()
                 .iter()
                 .map(|n| {
                     if n.is_leaf() {
@@ -123,7 +123,7 @@ impl<P: Primitive> Bvh<P> {
                 })
                 .sum(),
             Layout::Wide => {
-                let children = self.wide.iter().flat_map(|n| {
+                let children = self.wide_nodes().iter().flat_map(|n| {
                     (0..WIDTH)
                         .map(move |i| (n.child(i), n.child_bounds(i)))
                         .filter(|(c, _)| *c != ChildRef::EMPTY)
@@ -182,8 +182,8 @@ impl<P: Primitive> Bvh<P> {
                 if p.is_valid() {
                     valid += 1;
                     if kind.is_none()
-                        && self.test.is_some()
-                        && p.as_triangle().map(|(_, t)| t) != self.test
+                        && self.pack_test().is_some()
+                        && p.as_triangle().map(|(_, t)| t) != self.pack_test()
                     {
                         kind = Some(i as u32);
                     }
@@ -238,33 +238,40 @@ impl<P: Primitive> Bvh<P> {
 
     /// The binary tree, children after their parents: leaves re-read their primitives, interior
     /// nodes take the union of their two children.
-    fn refit_binary<G: Geometry<Prim = P> + ?Sized>(&mut self, geometry: &G) {
-        if self.ids.is_empty() {
+    fn refit_binary<G: Geometry<Prim = P> + ?Sized>(
+        nodes: &mut [Node],
+        items: &mut Items<P>,
+        geometry: &G,
+    ) {
+        if items.ids.is_empty() {
             return; // the one never-hit node of an empty tree
         }
-        for i in (0..self.binary.len()).rev() {
-            let node = self.binary[i];
-            self.binary[i].bounds = if node.is_leaf() {
+        for i in (0..nodes.len()).rev() {
+            let node = nodes[i];
+            nodes[i].bounds = if node.is_leaf() {
                 let mut b = Aabb::EMPTY;
                 for k in node.prim_range() {
-                    self.prims[k] = geometry.prim(self.ids[k] as usize);
-                    b = b.union(self.prims[k].bounds());
+                    items.prims[k] = geometry.prim(items.ids[k] as usize);
+                    b = b.union(items.prims[k].bounds());
                 }
                 b
             } else {
-                self.binary[i + 1]
-                    .bounds
-                    .union(self.binary[node.index as usize].bounds)
+                nodes[i + 1].bounds.union(nodes[node.index as usize].bounds)
             };
         }
     }
 
     /// The wide tree: the triangle packs re-read from the geometry (on rayon's threads when
-    /// large), then the nodes, children (higher indices) before their parents: a leaf lane
-    /// takes the box of its packs (or re-reads its primitives), a node lane the union of the
-    /// child node's lanes.
-    fn refit_wide<G: Geometry<Prim = P> + ?Sized>(&mut self, geometry: &G) {
-        if let Some(test) = self.test {
+    /// `parallel` says so), then the nodes, children (higher indices) before their parents: a
+    /// leaf lane takes the box of its packs (or re-reads its primitives), a node lane the union
+    /// of the child node's lanes.
+    fn refit_wide<G: Geometry<Prim = P> + ?Sized>(
+        wide: &mut Wide<P>,
+        geometry: &G,
+        parallel: impl Fn(usize) -> bool,
+    ) {
+        if let Leaves::Packs { packs, test } = &mut wide.leaves {
+            let test = *test;
             let repack = |pack: &mut TriPack| {
                 let mut tris = [(Triangle::new(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO), 0); PACK];
                 let n = pack.len();
@@ -277,14 +284,14 @@ impl<P: Primitive> Bvh<P> {
                 }
                 *pack = TriPack::new(&tris[..n], test);
             };
-            if self.parallel_refit(self.packs.len() * PACK) {
-                par::for_each_mut(&mut self.packs, 256, repack);
+            if parallel(packs.len() * PACK) {
+                par::for_each_mut(packs, 256, repack);
             } else {
-                self.packs.iter_mut().for_each(repack);
+                packs.iter_mut().for_each(repack);
             }
         }
-        for i in (0..self.wide.len()).rev() {
-            let (head, tail) = self.wide.split_at_mut(i + 1);
+        for i in (0..wide.nodes.len()).rev() {
+            let (head, tail) = wide.nodes.split_at_mut(i + 1);
             let node = &mut head[i];
             for lane in 0..WIDTH {
                 let c = node.child(lane);
@@ -294,24 +301,30 @@ impl<P: Primitive> Bvh<P> {
                 let b = if !c.is_leaf() {
                     node_box(&tail[c.index() - i - 1])
                 } else {
-                    match self.test {
+                    match &mut wide.leaves {
                         // The packs hold the vertices themselves.
-                        Some(TriangleTest::Watertight) => self.packs[c.items()]
+                        Leaves::Packs {
+                            packs,
+                            test: TriangleTest::Watertight,
+                        } => packs[c.items()]
                             .iter()
                             .fold(Aabb::EMPTY, |b, p| b.union(pack_box(p))),
                         // The packs hold edges, whose sums with `v0` may round: the box comes
                         // from the primitives, as the build's did.
-                        Some(TriangleTest::MollerTrumbore) => self.packs[c.items()]
+                        Leaves::Packs {
+                            packs,
+                            test: TriangleTest::MollerTrumbore,
+                        } => packs[c.items()]
                             .iter()
                             .flat_map(|p| p.ids[..p.len()].iter())
                             .fold(Aabb::EMPTY, |b, &id| {
                                 b.union(geometry.prim(id as usize).bounds())
                             }),
-                        None => {
+                        Leaves::Items(items) => {
                             let mut b = Aabb::EMPTY;
                             for k in c.items() {
-                                self.prims[k] = geometry.prim(self.ids[k] as usize);
-                                b = b.union(self.prims[k].bounds());
+                                items.prims[k] = geometry.prim(items.ids[k] as usize);
+                                b = b.union(items.prims[k].bounds());
                             }
                             b
                         }
@@ -359,9 +372,12 @@ fn node_box(node: &WideNode) -> Aabb {
 impl<P: Primitive> Refit for Bvh<P> {
     fn refit<G: Geometry<Prim = P> + ?Sized>(&mut self, geometry: &G) -> Result<(), RefitError> {
         self.check_refit(geometry)?;
-        match self.layout {
-            Layout::Binary => self.refit_binary(geometry),
-            Layout::Wide => self.refit_wide(geometry),
+        let parallel = self.parallel;
+        match &mut self.tree {
+            Tree::Binary { nodes, items } => Self::refit_binary(nodes, items, geometry),
+            Tree::Wide(wide) => Self::refit_wide(wide, geometry, |n| {
+                parallel && n >= PAR_REFIT_MIN && par::threads() > 1
+            }),
         }
         Ok(())
     }

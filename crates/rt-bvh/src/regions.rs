@@ -10,14 +10,14 @@ impl<P: Primitive> Bvh<P> {
     /// its parent's depth plus one. So the SAH prediction (`rt_core::predicted_cost`) counts box
     /// entries, while the measured visits of the wide layout count 8-wide nodes and leaves.
     pub(crate) fn walk_regions(&self, visit: &mut dyn FnMut(Region)) {
-        match self.layout {
+        match self.layout() {
             Layout::Binary => {
                 if self.valid == 0 {
                     return;
                 }
                 let mut stack = vec![(0usize, 0u32)];
                 while let Some((i, depth)) = stack.pop() {
-                    let node = &self.binary[i];
+                    let node = &self.nodes()[i];
                     let leaf = node.is_leaf();
                     visit(Region {
                         bounds: node.bounds,
@@ -32,7 +32,7 @@ impl<P: Primitive> Bvh<P> {
                 }
             }
             Layout::Wide => {
-                let Some(root) = self.wide.first() else {
+                let Some(root) = self.wide_nodes().first() else {
                     return;
                 };
                 let bounds = (0..8).fold(Aabb::EMPTY, |b, k| {
@@ -50,7 +50,7 @@ impl<P: Primitive> Bvh<P> {
                 });
                 let mut stack = vec![(0usize, 1u32)];
                 while let Some((i, depth)) = stack.pop() {
-                    let node = &self.wide[i];
+                    let node = &self.wide_nodes()[i];
                     for k in 0..8 {
                         let child = node.child(k);
                         if child.0 == crate::ChildRef::EMPTY.0 {
@@ -58,10 +58,10 @@ impl<P: Primitive> Bvh<P> {
                         }
                         let prims = child.is_leaf().then(|| {
                             let items = child.items();
-                            if self.packs.is_empty() {
+                            if self.packs().is_empty() {
                                 items.len() as u32
                             } else {
-                                self.packs[items].iter().map(|p| p.len() as u32).sum()
+                                self.packs()[items].iter().map(|p| p.len() as u32).sum()
                             }
                         });
                         visit(Region {

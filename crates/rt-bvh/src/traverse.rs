@@ -2,147 +2,146 @@
 //! and triangle tests. Each has one generic core for closest-hit and any-hit queries.
 
 use crate::kernels::{self, BoxRay, RayData, Simd};
+use crate::node::Node;
 use crate::node::{ChildRef, TriPack, WIDTH, WideNode};
 use crate::simd::Stack;
-use crate::{Bvh, MAX_DEPTH};
+use crate::{Items, MAX_DEPTH};
 use rt_core::trace::{self, Event, Place};
 use rt_core::{Hit, Primitive, Ray, SLAB_FAR_SCALE, Stats, Triangle, TriangleTest};
 use std::ops::Range;
 
-impl<P: Primitive> Bvh<P> {
-    /// The traversal core. `ANY = false` finds the closest hit; `ANY = true` returns the first
-    /// hit found (its `t` need not be the smallest).
-    ///
-    /// At an interior node both children's boxes are tested against `[t_min, best_t]`; the
-    /// nearer child is visited next and the farther one is pushed with its entry distance, and
-    /// skipped when popped if a hit closer than that entry has been found meanwhile
-    /// (front-to-back traversal; the comparison allows [`SLAB_FAR_SCALE`] of rounding, as the box
-    /// test does, so a primitive tying with the best hit is still found). The stack holds at most
-    /// one entry per tree level, and the builder bounds the depth by `MAX_DEPTH`, so a fixed
-    /// array suffices.
-    // PERF: kept out of line: inlined into the query beside every wide traversal, it ran 1.16x
-    // (bunny) and 1.21x (sphereflake) slower than the same loop written alone; out of line it
-    // runs 1.03x and 1.00x of it (`cargo bench -p rt-benches --bench stats -- stats-sink/`).
-    #[inline(never)]
-    pub(crate) fn traverse_binary<S: Stats, const ANY: bool>(
-        &self,
-        ray: &Ray,
-        stats: &mut S,
-    ) -> Option<Hit> {
-        let nodes = &self.binary[..];
-        let mut best = Hit {
-            prim: u32::MAX,
-            t: ray.t_max,
-            u: 0.0,
-            v: 0.0,
-        };
-        if self.ids.is_empty() || nodes[0].bounds.intersect(ray, best.t).is_none() {
-            return None;
-        }
-        let mut stack = [(0u32, 0.0f32); MAX_DEPTH];
-        let mut sp = 0;
-        let mut current = 0usize;
-        loop {
-            stats.node_visit();
-            let node = &nodes[current];
-            trace::report(stats, || {
-                let (t0, t1) = node
-                    .bounds
-                    .intersect(ray, best.t)
-                    .unwrap_or((f32::NAN, f32::NAN));
-                let i = current as u32;
-                Event::Enter {
-                    place: if node.is_leaf() {
-                        Place::Leaf(i)
-                    } else {
-                        Place::Node(i)
-                    },
-                    t0,
-                    t1,
-                    bounds: Some(node.bounds),
-                }
-            });
-            if node.is_leaf() {
-                // PERF: one bounds check per leaf instead of two per primitive: bunny primary rays
-                // 8.76 -> 9.20 Mrays/s single-threaded (`cargo bench -p rt-benches --bench trace`).
-                let range = node.prim_range();
-                for (prim, &id) in self.prims[range.clone()].iter().zip(&self.ids[range]) {
-                    stats.prim_test();
-                    if ANY {
-                        let blocks = prim.occludes(ray, best.t);
-                        trace::blocked(stats, id, blocks);
-                        if blocks {
-                            return Some(Hit {
-                                prim: id,
-                                t: f32::NAN,
-                                u: 0.0,
-                                v: 0.0,
-                            });
-                        }
-                        continue;
-                    }
-                    let hit = prim.intersect(ray, best.t);
-                    trace::tested(stats, id, hit.map(|h| h.t));
-                    if let Some(h) = hit
-                        && Hit::beats(h.t, id, best.t, best.prim)
-                    {
-                        best = Hit {
-                            prim: id,
-                            t: h.t,
-                            u: h.u,
-                            v: h.v,
-                        };
-                    }
-                }
-            } else {
-                let (a, b) = (current + 1, node.index as usize);
-                let ta = nodes[a].bounds.entry(ray, best.t);
-                let tb = nodes[b].bounds.entry(ray, best.t);
-                let (near, t_near, far, t_far) = if ta <= tb {
-                    (a, ta, b, tb)
+/// The binary tree's traversal core. `ANY = false` finds the closest hit; `ANY = true` returns the first
+/// hit found (its `t` need not be the smallest).
+///
+/// At an interior node both children's boxes are tested against `[t_min, best_t]`; the
+/// nearer child is visited next and the farther one is pushed with its entry distance, and
+/// skipped when popped if a hit closer than that entry has been found meanwhile
+/// (front-to-back traversal; the comparison allows [`SLAB_FAR_SCALE`] of rounding, as the box
+/// test does, so a primitive tying with the best hit is still found). The stack holds at most
+/// one entry per tree level, and the builder bounds the depth by `MAX_DEPTH`, so a fixed
+/// array suffices.
+// PERF: kept out of line: inlined into the query beside every wide traversal, it ran 1.16x
+// (bunny) and 1.21x (sphereflake) slower than the same loop written alone; out of line it
+// runs 1.03x and 1.00x of it (`cargo bench -p rt-benches --bench stats -- stats-sink/`).
+#[inline(never)]
+pub(crate) fn binary<P: Primitive, S: Stats, const ANY: bool>(
+    nodes: &[Node],
+    items: &Items<P>,
+    ray: &Ray,
+    stats: &mut S,
+) -> Option<Hit> {
+    let mut best = Hit {
+        prim: u32::MAX,
+        t: ray.t_max,
+        u: 0.0,
+        v: 0.0,
+    };
+    if items.ids.is_empty() || nodes[0].bounds.intersect(ray, best.t).is_none() {
+        return None;
+    }
+    let mut stack = [(0u32, 0.0f32); MAX_DEPTH];
+    let mut sp = 0;
+    let mut current = 0usize;
+    loop {
+        stats.node_visit();
+        let node = &nodes[current];
+        trace::report(stats, || {
+            let (t0, t1) = node
+                .bounds
+                .intersect(ray, best.t)
+                .unwrap_or((f32::NAN, f32::NAN));
+            let i = current as u32;
+            Event::Enter {
+                place: if node.is_leaf() {
+                    Place::Leaf(i)
                 } else {
-                    (b, tb, a, ta)
-                };
-                if S::TRACE {
-                    for (c, t) in [(near, t_near), (far, t_far)] {
-                        if t != f32::INFINITY {
-                            let place = Place::Node(c as u32);
-                            stats.event(Event::Child { place, t });
-                        }
-                    }
-                }
-                if t_near != f32::INFINITY {
-                    if t_far != f32::INFINITY {
-                        stack[sp] = (far as u32, t_far);
-                        sp += 1;
-                        trace::report(stats, || Event::Push {
-                            place: Place::Node(far as u32),
-                            t: t_far,
+                    Place::Node(i)
+                },
+                t0,
+                t1,
+                bounds: Some(node.bounds),
+            }
+        });
+        if node.is_leaf() {
+            // PERF: one bounds check per leaf instead of two per primitive: bunny primary rays
+            // 8.76 -> 9.20 Mrays/s single-threaded (`cargo bench -p rt-benches --bench trace`).
+            let range = node.prim_range();
+            for (prim, &id) in items.prims[range.clone()].iter().zip(&items.ids[range]) {
+                stats.prim_test();
+                if ANY {
+                    let blocks = prim.occludes(ray, best.t);
+                    trace::blocked(stats, id, blocks);
+                    if blocks {
+                        return Some(Hit {
+                            prim: id,
+                            t: f32::NAN,
+                            u: 0.0,
+                            v: 0.0,
                         });
                     }
-                    current = near;
                     continue;
                 }
-                trace::report(stats, || Event::Note("the ray enters neither child's box"));
+                let hit = prim.intersect(ray, best.t);
+                trace::tested(stats, id, hit.map(|h| h.t));
+                if let Some(h) = hit
+                    && Hit::beats(h.t, id, best.t, best.prim)
+                {
+                    best = Hit {
+                        prim: id,
+                        t: h.t,
+                        u: h.u,
+                        v: h.v,
+                    };
+                }
             }
-            // Pop the next subtree that can still hold a hit no farther than the best so far.
-            loop {
-                if sp == 0 {
-                    trace::report(stats, || Event::Note("stack empty: done"));
-                    return (best.prim != u32::MAX).then_some(best);
+        } else {
+            let (a, b) = (current + 1, node.index as usize);
+            let ta = nodes[a].bounds.entry(ray, best.t);
+            let tb = nodes[b].bounds.entry(ray, best.t);
+            let (near, t_near, far, t_far) = if ta <= tb {
+                (a, ta, b, tb)
+            } else {
+                (b, tb, a, ta)
+            };
+            if S::TRACE {
+                for (c, t) in [(near, t_near), (far, t_far)] {
+                    if t != f32::INFINITY {
+                        let place = Place::Node(c as u32);
+                        stats.event(Event::Child { place, t });
+                    }
                 }
-                sp -= 1;
-                let (index, t_entry) = stack[sp];
-                let skipped = t_entry > best.t * SLAB_FAR_SCALE;
-                trace::report(stats, || Event::Pop {
-                    place: Place::Node(index),
-                    t: t_entry,
-                    skipped,
-                });
-                if !skipped {
-                    current = index as usize;
-                    break;
+            }
+            if t_near != f32::INFINITY {
+                if t_far != f32::INFINITY {
+                    stack[sp] = (far as u32, t_far);
+                    sp += 1;
+                    trace::report(stats, || Event::Push {
+                        place: Place::Node(far as u32),
+                        t: t_far,
+                    });
                 }
+                current = near;
+                continue;
+            }
+            trace::report(stats, || Event::Note("the ray enters neither child's box"));
+        }
+        // Pop the next subtree that can still hold a hit no farther than the best so far.
+        loop {
+            if sp == 0 {
+                trace::report(stats, || Event::Note("stack empty: done"));
+                return (best.prim != u32::MAX).then_some(best);
+            }
+            sp -= 1;
+            let (index, t_entry) = stack[sp];
+            let skipped = t_entry > best.t * SLAB_FAR_SCALE;
+            trace::report(stats, || Event::Pop {
+                place: Place::Node(index),
+                t: t_entry,
+                skipped,
+            });
+            if !skipped {
+                current = index as usize;
+                break;
             }
         }
     }
@@ -328,7 +327,7 @@ fn consider(best: &mut Hit, id: u32, t: f32, u: f32, v: f32) {
 
 /// The wide traversal core, shared by closest hit (`ANY = false`) and any hit (`ANY = true`).
 /// `SORT = false` skips sorting the children a closest-hit ray enters (a switch to measure what
-/// the sorting gains; see [`BvhParams::sort_children`](crate::BvhParams::sort_children)).
+/// the sorting gains; see [`Ablation::sort_children`](crate::Ablation::sort_children)).
 ///
 /// Each visit tests all children of a node with one slab test. Closest hit: the children
 /// entered are sorted by entry distance; the nearest is visited next and the others pushed with

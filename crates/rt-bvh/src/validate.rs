@@ -3,28 +3,7 @@
 use crate::node::{ChildRef, TriPack, WIDTH};
 use crate::{Bvh, Layout, MAX_DEPTH};
 use rt_core::glam::Vec3;
-use rt_core::{Aabb, Primitive, TriangleTest};
-use std::fmt;
-
-/// A broken invariant found by [`Bvh::validate`].
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ValidationError {
-    /// The node where the invariant fails (`None` for whole-tree invariants).
-    pub node: Option<usize>,
-    /// Which invariant.
-    pub message: String,
-}
-
-impl fmt::Display for ValidationError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        match self.node {
-            Some(n) => write!(f, "node {n}: {}", self.message),
-            None => write!(f, "{}", self.message),
-        }
-    }
-}
-
-impl std::error::Error for ValidationError {}
+use rt_core::{Aabb, Primitive, TriangleTest, ValidationError};
 
 impl<P: Primitive> Bvh<P> {
     /// Checks the tree's invariants.
@@ -49,7 +28,7 @@ impl<P: Primitive> Bvh<P> {
     /// # Errors
     /// The first broken invariant.
     pub fn validate(&self) -> Result<(), ValidationError> {
-        match self.layout {
+        match self.layout() {
             Layout::Binary => self.validate_binary(),
             Layout::Wide => self.validate_wide(),
         }
@@ -57,10 +36,13 @@ impl<P: Primitive> Bvh<P> {
 
     fn validate_binary(&self) -> Result<(), ValidationError> {
         let err = |node: Option<usize>, message: String| Err(ValidationError { node, message });
-        let nodes = &self.binary;
-        let n = self.prims.len();
-        if self.ids.len() != n {
-            return err(None, format!("{} primitives but {} ids", n, self.ids.len()));
+        let nodes = self.nodes();
+        let n = self.primitives().len();
+        if self.primitive_ids().len() != n {
+            return err(
+                None,
+                format!("{} primitives but {} ids", n, self.primitive_ids().len()),
+            );
         }
         if n == 0 {
             return if nodes.len() == 1 {
@@ -99,7 +81,7 @@ impl<P: Primitive> Bvh<P> {
                     if std::mem::replace(&mut covered[k], true) {
                         return err(Some(i), format!("primitive slot {k} is in two leaves"));
                     }
-                    if !node.bounds.contains(&self.prims[k].bounds()) {
+                    if !node.bounds.contains(&self.primitives()[k].bounds()) {
                         return err(
                             Some(i),
                             format!("primitive slot {k} sticks out of its leaf box"),
@@ -132,29 +114,33 @@ impl<P: Primitive> Bvh<P> {
         if let Some(k) = covered.iter().position(|c| !c) {
             return err(None, format!("primitive slot {k} is in no leaf"));
         }
-        distinct_ids(self.ids.iter().copied(), self.stored, self.valid)
+        distinct_ids(
+            self.primitive_ids().iter().copied(),
+            self.stored,
+            self.valid,
+        )
     }
 
     fn validate_wide(&self) -> Result<(), ValidationError> {
         let err = |node: Option<usize>, message: String| Err(ValidationError { node, message });
-        let nodes = &self.wide;
+        let nodes = self.wide_nodes();
         if nodes.is_empty() {
-            return if self.valid == 0 && self.packs.is_empty() && self.prims.is_empty() {
+            return if self.valid == 0 && self.packs().is_empty() && self.primitives().is_empty() {
                 Ok(())
             } else {
                 err(None, "no nodes but primitives were kept".into())
             };
         }
-        let packed = self.test.is_some();
+        let packed = self.pack_test().is_some();
         let items = if packed {
-            self.packs.len()
+            self.packs().len()
         } else {
-            self.prims.len()
+            self.primitives().len()
         };
-        if !packed && self.ids.len() != items {
+        if !packed && self.primitive_ids().len() != items {
             return err(
                 None,
-                format!("{items} primitives but {} ids", self.ids.len()),
+                format!("{items} primitives but {} ids", self.primitive_ids().len()),
             );
         }
         let mut reached = vec![false; nodes.len()];
@@ -217,8 +203,8 @@ impl<P: Primitive> Bvh<P> {
                     if std::mem::replace(&mut covered[k], true) {
                         return err(Some(i), format!("item {k} is in two leaves"));
                     }
-                    let boxes = if let Some(test) = self.test {
-                        let pack = &self.packs[k];
+                    let boxes = if let Some(test) = self.pack_test() {
+                        let pack = &self.packs()[k];
                         let n = pack.len();
                         if pack.ids[..n].contains(&u32::MAX)
                             || pack.rows.iter().any(|r| r[n..].iter().any(|x| !x.is_nan()))
@@ -232,7 +218,7 @@ impl<P: Primitive> Bvh<P> {
                             .map(|l| pack_triangle_bounds(pack, l, test))
                             .collect()
                     } else {
-                        vec![self.prims[k].bounds()]
+                        vec![self.primitives()[k].bounds()]
                     };
                     if boxes.iter().any(|t| !b.contains(t)) {
                         return err(Some(i), format!("item {k} sticks out of its leaf box"));
@@ -248,12 +234,16 @@ impl<P: Primitive> Bvh<P> {
         }
         if packed {
             let ids = self
-                .packs
+                .packs()
                 .iter()
                 .flat_map(|p| p.ids.iter().copied().filter(|&id| id != u32::MAX));
             distinct_ids(ids, self.stored, self.valid)
         } else {
-            distinct_ids(self.ids.iter().copied(), self.stored, self.valid)
+            distinct_ids(
+                self.primitive_ids().iter().copied(),
+                self.stored,
+                self.valid,
+            )
         }
     }
 }
@@ -301,7 +291,7 @@ fn distinct_ids(
 
 #[cfg(test)]
 mod tests {
-    use crate::{Bvh, BvhParams};
+    use crate::{Bvh, BvhParams, Node, Tree};
     use rt_core::{Accel, Triangle};
     use rt_scene::scenes;
 
@@ -309,18 +299,26 @@ mod tests {
         Bvh::build(&scenes::random_soup(500, 1).triangles(), &BvhParams::sah())
     }
 
+    /// A binary tree's nodes and primitive ids, to break on purpose.
+    fn parts(b: &mut Bvh<Triangle>) -> (&mut Vec<Node>, &mut Vec<u32>) {
+        match &mut b.tree {
+            Tree::Binary { nodes, items } => (nodes, &mut items.ids),
+            Tree::Wide(_) => panic!("a binary tree"),
+        }
+    }
+
     /// `validate` accepts a built tree and rejects each kind of corruption it claims to detect.
     #[test]
     fn detects_each_broken_invariant() {
         assert_eq!(tree().validate(), Ok(()));
 
-        let first_leaf = |b: &Bvh<Triangle>| b.binary.iter().position(|n| n.is_leaf()).unwrap();
+        let first_leaf = |b: &Bvh<Triangle>| b.nodes().iter().position(|n| n.is_leaf()).unwrap();
         let first_interior =
-            |b: &Bvh<Triangle>| b.binary.iter().position(|n| !n.is_leaf()).unwrap();
+            |b: &Bvh<Triangle>| b.nodes().iter().position(|n| !n.is_leaf()).unwrap();
 
         let mut b = tree();
         let i = first_interior(&b);
-        b.binary[i].bounds.max.x -= 0.5;
+        parts(&mut b).0[i].bounds.max.x -= 0.5;
         assert!(
             b.validate()
                 .unwrap_err()
@@ -330,16 +328,16 @@ mod tests {
 
         let mut b = tree();
         let i = first_leaf(&b);
-        b.binary[i].bounds.min.y += 0.5;
+        parts(&mut b).0[i].bounds.min.y += 0.5;
         assert!(b.validate().is_err());
 
         let mut b = tree();
         let i = first_leaf(&b);
-        b.binary[i].index += 1; // overlaps the next leaf's first slot and drops its own
+        parts(&mut b).0[i].index += 1; // overlaps the next leaf's first slot and drops its own
         assert!(b.validate().is_err());
 
         let mut b = tree();
-        b.binary[0].index = 0; // second child pointing backwards
+        parts(&mut b).0[0].index = 0; // second child pointing backwards
         assert!(
             b.validate()
                 .unwrap_err()
@@ -348,11 +346,12 @@ mod tests {
         );
 
         let mut b = tree();
-        b.ids[3] = b.ids[4];
+        let ids = parts(&mut b).1;
+        ids[3] = ids[4];
         assert!(b.validate().unwrap_err().message.contains("appears twice"));
 
         let mut b = tree();
-        b.ids.pop();
+        parts(&mut b).1.pop();
         assert!(b.validate().is_err());
     }
 }

@@ -2,7 +2,7 @@
 //! and the portable ones are forced here, so the fallbacks are tested on every CI run, AVX2 or
 //! not), plus structural validation on the same scenes.
 
-use rt_bvh::{Bvh, BvhParams, Kernels};
+use rt_bvh::{Ablation, Bvh, BvhParams, Kernels};
 use rt_conformance::SCENES;
 use rt_core::{Accel, Sphere, Triangle};
 
@@ -29,8 +29,10 @@ rt_conformance::conformance_tests!(
     wide_unsorted_closest_any,
     Bvh<Triangle>,
     BvhParams {
-        sort_children: false,
-        any_hit_path: false,
+        ablation: Ablation {
+            sort_children: false,
+            any_hit_path: false,
+        },
         ..BvhParams::wide()
     }
 );

@@ -6,7 +6,7 @@ use rt_bvh::{Bvh, BvhParams, Instances};
 use rt_conformance::{
     BottomBuilder, TWO_LEVEL_SCENES, check_two_level_random, check_two_level_scene,
 };
-use rt_core::{Accel, Bottom, BruteForce, Triangle};
+use rt_core::{Accel, BruteForce, DynAccel, Triangle};
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
 use rt_kdtree::KdTree;
@@ -15,25 +15,25 @@ use std::sync::Arc;
 
 type Scene = Instances<Triangle>;
 
-fn wide(t: &[Triangle]) -> Arc<dyn Bottom<Triangle>> {
+fn wide(t: &[Triangle]) -> Arc<dyn DynAccel<Triangle>> {
     Arc::new(Bvh::build(t, &BvhParams::wide()))
 }
-fn binary(t: &[Triangle]) -> Arc<dyn Bottom<Triangle>> {
+fn binary(t: &[Triangle]) -> Arc<dyn DynAccel<Triangle>> {
     Arc::new(Bvh::build(t, &BvhParams::sah()))
 }
-fn kdtree(t: &[Triangle]) -> Arc<dyn Bottom<Triangle>> {
+fn kdtree(t: &[Triangle]) -> Arc<dyn DynAccel<Triangle>> {
     Arc::new(KdTree::build(t, &Default::default()))
 }
-fn grid(t: &[Triangle]) -> Arc<dyn Bottom<Triangle>> {
+fn grid(t: &[Triangle]) -> Arc<dyn DynAccel<Triangle>> {
     Arc::new(Grid::build(t, &Default::default()))
 }
-fn hgrid(t: &[Triangle]) -> Arc<dyn Bottom<Triangle>> {
+fn hgrid(t: &[Triangle]) -> Arc<dyn DynAccel<Triangle>> {
     Arc::new(HGrid::build(t, &Default::default()))
 }
-fn octree(t: &[Triangle]) -> Arc<dyn Bottom<Triangle>> {
+fn octree(t: &[Triangle]) -> Arc<dyn DynAccel<Triangle>> {
     Arc::new(Octree::build(t, &Default::default()))
 }
-fn brute(t: &[Triangle]) -> Arc<dyn Bottom<Triangle>> {
+fn brute(t: &[Triangle]) -> Arc<dyn DynAccel<Triangle>> {
     Arc::new(BruteForce::build(t, &()))
 }
 

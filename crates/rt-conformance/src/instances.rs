@@ -6,7 +6,7 @@ use glam::{Affine3A, Quat, Vec3};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 use rt_core::{
-    Accel, Bottom, BruteForce, Counters, Hit, Instance, InstanceHit, InstancePointHit,
+    Accel, BruteForce, Counters, DynAccel, Hit, Instance, InstanceHit, InstancePointHit,
     LinearInstances, Primitive, Ray, Rng, Triangle, TwoLevel, scene_margins,
 };
 use std::collections::HashMap;
@@ -14,7 +14,7 @@ use std::sync::Arc;
 
 /// Builds a bottom level over triangles: how the kit is told which structures to put under
 /// the instances (`|t| Arc::new(KdTree::build(t, &Default::default()))`, say).
-pub type BottomBuilder = fn(&[Triangle]) -> Arc<dyn Bottom<Triangle>>;
+pub type BottomBuilder = fn(&[Triangle]) -> Arc<dyn DynAccel<Triangle>>;
 
 /// One instance of a case: which mesh, built by which of the kit's bottom builders, placed by
 /// which transform, with which id.
@@ -306,8 +306,8 @@ pub fn check_two_level_case<T: TwoLevel<Triangle> + 'static>(
     let shown = summary.clone();
     super::watched(T::NAME, STALL_LIMIT, &shown, move |probe| {
         probe.building(case.placements.len());
-        let mut built: HashMap<(usize, usize), Arc<dyn Bottom<Triangle>>> = HashMap::new();
-        let mut reference_bottoms: HashMap<usize, Arc<dyn Bottom<Triangle>>> = HashMap::new();
+        let mut built: HashMap<(usize, usize), Arc<dyn DynAccel<Triangle>>> = HashMap::new();
+        let mut reference_bottoms: HashMap<usize, Arc<dyn DynAccel<Triangle>>> = HashMap::new();
         let mut instances = Vec::new();
         let mut reference = Vec::new();
         for p in &case.placements {

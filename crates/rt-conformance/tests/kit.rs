@@ -238,7 +238,7 @@ impl<const LATE: bool> rt_core::TwoLevel<Triangle> for SkipsOne<LATE> {
     }
 }
 
-fn brute_bottom(t: &[Triangle]) -> std::sync::Arc<dyn rt_core::Bottom<Triangle>> {
+fn brute_bottom(t: &[Triangle]) -> std::sync::Arc<dyn rt_core::DynAccel<Triangle>> {
     std::sync::Arc::new(BruteForce::build(t, &()))
 }
 

@@ -241,15 +241,49 @@ pub trait Accel: Sized + Send + Sync {
     }
 }
 
-/// A broken structural invariant, described in one sentence: what a structure's `validate`
-/// method returns (`rt-grid`, `rt-hgrid` and `rt-octree` use this type) when its tree or cells
-/// do not match what the builder's rules say.
+/// A broken structural invariant: what every structure's `validate` method returns when its
+/// tree or cells do not match what the builder's rules say. Where (the node or cell, numbered as
+/// the structure numbers them, when one is to blame) and what, in one sentence.
+///
+/// ```
+/// use rt_core::ValidationError;
+/// assert_eq!(ValidationError::at(7, "child box outside its parent").to_string(),
+///            "node 7: child box outside its parent");
+/// assert_eq!(ValidationError::new("3 primitives but 2 ids").to_string(), "3 primitives but 2 ids");
+/// ```
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ValidationError(pub String);
+pub struct ValidationError {
+    /// The node or cell where the invariant fails (`None` for an invariant of the whole
+    /// structure).
+    pub node: Option<usize>,
+    /// Which invariant, in one sentence.
+    pub message: String,
+}
+
+impl ValidationError {
+    /// An invariant of the whole structure.
+    pub fn new(message: impl Into<String>) -> Self {
+        Self {
+            node: None,
+            message: message.into(),
+        }
+    }
+
+    /// An invariant that fails at node (or cell) `node`.
+    pub fn at(node: usize, message: impl Into<String>) -> Self {
+        Self {
+            node: Some(node),
+            message: message.into(),
+        }
+    }
+}
 
 impl std::fmt::Display for ValidationError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(&self.0)
+        match self.node {
+            Some(n) => write!(f, "node {n}: {}", self.message),
+            None => f.write_str(&self.message),
+        }
     }
 }
 

@@ -1,8 +1,8 @@
 //! Two-level scenes: built structures placed many times with affine transforms, without copying
 //! their geometry.
 //!
-//! An [`Instance`] is a bottom-level structure (any [`Accel`], behind the object-safe
-//! [`Bottom`] trait, so a kd-tree and a grid can sit side by side), an
+//! An [`Instance`] is a bottom-level structure (any [`Accel`](crate::Accel), behind the object-safe
+//! [`DynAccel`] trait, so a kd-tree and a grid can sit side by side), an
 //! [`InstanceTransform`] from its object space to the world, and the caller's id. A two-level
 //! scene ([`TwoLevel`]) answers rays and closest-point queries over all its instances:
 //! rt-bvh's `Instances` with a BVH over the instances' world boxes, [`LinearInstances`] by
@@ -36,8 +36,8 @@
 //! both (`rt_conformance::check_two_level_case`).
 
 use crate::{
-    Aabb, Accel, BallQuery, BuildStats, Counters, Hit, MtTriangle, NoStats, Primitive, Ray, Stats,
-    Triangle, closest_point_on_triangle, point_distance,
+    Aabb, BallQuery, Counters, DynAccel, Hit, MtTriangle, NoStats, Primitive, Ray, Stats, Triangle,
+    closest_point_on_triangle, point_distance,
 };
 use glam::{Affine3A, DMat3, DVec3, Mat3A, Vec3, Vec3A};
 use std::fmt::Debug;
@@ -309,67 +309,6 @@ impl TransformPrimitive for MtTriangle {
     }
 }
 
-/// A built structure seen through a trait object, so one scene can hold instances of several
-/// kinds: every [`Accel`] is one.
-///
-/// The queries take `Some(counters)` to count their events and `None` to run the uncounted
-/// traversal.
-pub trait Bottom<P>: Send + Sync {
-    /// [`Accel::NAME`].
-    fn name(&self) -> &'static str;
-    /// [`Accel::bounds`].
-    fn bounds(&self) -> Aabb;
-    /// [`Accel::intersect`], counted into `counters` if given.
-    fn intersect_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> Option<Hit>;
-    /// [`Accel::occluded`], counted into `counters` if given.
-    fn occluded_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> bool;
-    /// [`Accel::ball_query`], counted into `counters` if given.
-    fn ball_query_dyn(&self, query: &mut dyn BallQuery<P>, counters: Option<&mut Counters>);
-    /// [`Accel::memory_bytes`].
-    fn memory_bytes(&self) -> usize;
-    /// [`Accel::build_stats`].
-    fn build_stats(&self) -> BuildStats;
-}
-
-impl<A: Accel> Bottom<A::Prim> for A {
-    fn name(&self) -> &'static str {
-        A::NAME
-    }
-    fn bounds(&self) -> Aabb {
-        Accel::bounds(self)
-    }
-    #[inline]
-    fn intersect_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> Option<Hit> {
-        match counters {
-            Some(c) => self.intersect_with(ray, c),
-            None => self.intersect_with(ray, &mut NoStats),
-        }
-    }
-    #[inline]
-    fn occluded_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> bool {
-        match counters {
-            Some(c) => self.occluded_with(ray, c),
-            None => self.occluded_with(ray, &mut NoStats),
-        }
-    }
-    fn ball_query_dyn(
-        &self,
-        mut query: &mut dyn BallQuery<A::Prim>,
-        counters: Option<&mut Counters>,
-    ) {
-        match counters {
-            Some(c) => self.ball_query(&mut query, c),
-            None => self.ball_query(&mut query, &mut NoStats),
-        }
-    }
-    fn memory_bytes(&self) -> usize {
-        Accel::memory_bytes(self)
-    }
-    fn build_stats(&self) -> BuildStats {
-        Accel::build_stats(self)
-    }
-}
-
 /// Runs `f` with counters when `S` records anything, and adds them to `stats`.
 #[inline(always)]
 fn counted<S: Stats, R>(stats: &mut S, f: impl FnOnce(Option<&mut Counters>) -> R) -> R {
@@ -399,7 +338,7 @@ fn counted<S: Stats, R>(stats: &mut S, f: impl FnOnce(Option<&mut Counters>) -> 
 /// ```
 #[derive(Clone)]
 pub struct Instance<P> {
-    bottom: Arc<dyn Bottom<P>>,
+    bottom: Arc<dyn DynAccel<P>>,
     transform: InstanceTransform,
     world_bounds: Aabb,
     reach: f32,
@@ -427,12 +366,12 @@ impl<P: Primitive> Instance<P> {
     /// # Errors
     /// As [`InstanceTransform::new`]: a non-finite, singular or badly conditioned transform.
     pub fn new(
-        bottom: Arc<dyn Bottom<P>>,
+        bottom: Arc<dyn DynAccel<P>>,
         to_world: Affine3A,
         id: u32,
     ) -> Result<Self, InstanceError> {
         let transform = InstanceTransform::new(to_world)?;
-        let (world_bounds, reach) = transform.world_bounds(&bottom.bounds());
+        let (world_bounds, reach) = transform.world_bounds(&bottom.bounds_dyn());
         Ok(Self {
             bottom,
             transform,
@@ -456,7 +395,7 @@ impl<P: Primitive> Instance<P> {
 
     /// The bottom-level structure.
     #[inline]
-    pub fn bottom(&self) -> &Arc<dyn Bottom<P>> {
+    pub fn bottom(&self) -> &Arc<dyn DynAccel<P>> {
         &self.bottom
     }
 
@@ -816,7 +755,7 @@ pub fn bottom_bytes<P>(instances: &[Instance<P>]) -> usize {
     instances
         .iter()
         .filter(|i| seen.insert(Arc::as_ptr(&i.bottom) as *const () as usize))
-        .map(|i| i.bottom.memory_bytes())
+        .map(|i| i.bottom.memory_bytes_dyn())
         .sum()
 }
 

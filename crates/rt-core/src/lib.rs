@@ -41,7 +41,7 @@
 //! callers can write others (a transformed instance, all primitives within a radius).
 //!
 //! # Instances
-//! A two-level scene places built structures (any [`Accel`], behind [`Bottom`], kinds mixed) with
+//! A two-level scene places built structures (any [`Accel`], behind [`DynAccel`], kinds mixed) with
 //! affine transforms: [`Instance`], [`TwoLevel`], the reference [`LinearInstances`], and rt-bvh's
 //! `Instances` with a BVH over the instances. Hits ([`InstanceHit`]) name the instance, its id and
 //! the primitive in the bottom level's own input; see the module documentation of [`instance`] for
@@ -72,6 +72,7 @@ mod brute;
 mod clip;
 mod closest;
 mod cost;
+mod dyn_accel;
 mod geometry;
 pub mod instance;
 pub mod leaf;
@@ -98,10 +99,11 @@ pub use closest::{
     BallQuery, ClosestPointQuery, PointHit, closest_point_on_triangle, point_distance,
 };
 pub use cost::{PredictedCost, predicted_cost};
+pub use dyn_accel::DynAccel;
 pub use geometry::{Geometry, IndexedTriangles};
 pub use instance::{
-    Bottom, Instance, InstanceError, InstanceHit, InstancePointHit, InstancePointQuery,
-    InstanceTransform, LinearInstances, TransformPrimitive, TwoLevel, bottom_bytes,
+    Instance, InstanceError, InstanceHit, InstancePointHit, InstancePointQuery, InstanceTransform,
+    LinearInstances, TransformPrimitive, TwoLevel, bottom_bytes,
     closest_point_on_transformed_triangle, scene_margins,
 };
 pub use mailbox::Mailbox;

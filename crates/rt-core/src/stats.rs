@@ -17,7 +17,7 @@ pub trait Stats {
     const TRACE: bool = false;
 
     /// Whether this sink records anything. Layers that call structures through trait objects
-    /// (the instances of a two-level scene, see [`Bottom`](crate::Bottom)) cannot pass a generic
+    /// (the instances of a two-level scene, see [`DynAccel`](crate::DynAccel)) cannot pass a generic
     /// sink down; they take the uncounted path when this is `false` (as for [`NoStats`]) and
     /// otherwise count into [`Counters`] and hand them over with [`Stats::add`].
     const COUNTS: bool = true;

@@ -10,7 +10,7 @@ impl<P: Primitive> Grid<P> {
     /// primitive listed in exactly the cells of its bounding box that it overlaps (the builder's
     /// test), so none is missing where a ray could hit it.
     pub fn validate(&self) -> Result<(), ValidationError> {
-        let err = |s: String| Err(ValidationError(s));
+        let err = |s: String| Err(ValidationError::new(s));
         let n = self.shape.cell_count();
         if self.cells.len() != n + 1 || self.cells[0] != 0 {
             return err(format!("{} offsets for {n} cells", self.cells.len()));
@@ -97,13 +97,13 @@ mod tests {
         let i = full_cell(&g);
         let lo = g.cells[i] as usize;
         g.refs.swap(lo, lo + 1);
-        assert!(g.validate().unwrap_err().0.contains("increasing"));
+        assert!(g.validate().unwrap_err().message.contains("increasing"));
 
         // The cell's last reference, so its list stays increasing.
         let mut g = grid();
         let last = g.cells[full_cell(&g) + 1] as usize - 1;
         g.refs[last] = 10_000;
-        assert!(g.validate().unwrap_err().0.contains("out of range"));
+        assert!(g.validate().unwrap_err().message.contains("out of range"));
 
         // A reference moved from one cell to the next: the primitive is missing where it
         // overlaps and listed where it does not.
@@ -114,6 +114,6 @@ mod tests {
 
         let mut g = grid();
         g.cells.pop();
-        assert!(g.validate().unwrap_err().0.contains("offsets"));
+        assert!(g.validate().unwrap_err().message.contains("offsets"));
     }
 }

@@ -12,7 +12,7 @@ impl<P: Primitive> HGrid<P> {
     /// parent's list that overlap it (the builder's test), in increasing order, a parent cell
     /// through its own list. So no primitive is missing where a ray could hit it.
     pub fn validate(&self) -> Result<(), ValidationError> {
-        let err = |s: String| Err(ValidationError(s));
+        let err = |s: String| Err(ValidationError::new(s));
         let Some(top) = self.levels.first() else {
             return err("no grid".into());
         };

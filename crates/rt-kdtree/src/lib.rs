@@ -112,7 +112,7 @@ mod traverse;
 mod validate;
 
 pub use node::Node;
-pub use validate::ValidationError;
+pub use rt_core::ValidationError;
 
 use rt_core::{Aabb, Accel, BuildStats, Hit, Primitive, Ray, Stats};
 

@@ -1,25 +1,7 @@
 //! Structural checks of a built tree.
 
 use crate::{KdTree, MAX_DEPTH};
-use rt_core::{Aabb, Primitive};
-use std::fmt;
-
-/// What [`KdTree::validate`] found wrong, and at which node.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ValidationError {
-    /// The offending node's index.
-    pub node: usize,
-    /// What is wrong with it.
-    pub message: String,
-}
-
-impl fmt::Display for ValidationError {
-    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        write!(f, "kd-tree node {}: {}", self.node, self.message)
-    }
-}
-
-impl std::error::Error for ValidationError {}
+use rt_core::{Aabb, Primitive, ValidationError};
 
 impl<P: Primitive> KdTree<P> {
     /// Checks the tree's invariants, for tests and for students' builders:
@@ -31,7 +13,7 @@ impl<P: Primitive> KdTree<P> {
     /// - every valid primitive is referenced by at least one leaf;
     /// - the counts reported by `build_stats` match the tree.
     pub fn validate(&self) -> Result<(), ValidationError> {
-        let err = |node: usize, message: String| Err(ValidationError { node, message });
+        let err = |node: usize, message: String| Err(ValidationError::at(node, message));
         let n = self.nodes.len();
         if n == 0 {
             return err(0, "no root".into());

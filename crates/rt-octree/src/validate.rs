@@ -12,7 +12,7 @@ impl<P: Primitive> Octree<P> {
     /// parent's list that overlap its box (the builder's test, repeated from the root down), in
     /// increasing order. So no primitive is missing where a ray could hit it.
     pub fn validate(&self) -> Result<(), ValidationError> {
-        let err = |s: String| Err(ValidationError(s));
+        let err = |s: String| Err(ValidationError::new(s));
         let valid: Vec<u32> = (0..self.prims.len() as u32)
             .filter(|&i| self.prims[i as usize].is_valid())
             .collect();

@@ -3,8 +3,9 @@
 //! `--pixelstats` idea), with a legend that shows the numbers.
 
 use crate::image::per_pixel;
-use crate::{Image, ImageError, RenderScene, Tracer};
+use crate::{Image, ImageError, RenderScene};
 use rt_core::Counters;
+use rt_core::{DynAccel, Shape};
 
 /// What a heatmap counts per primary ray.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -78,7 +79,7 @@ impl CostMap {
 /// [`ImageError::BadSize`] for an unusable size.
 pub fn cost_map(
     scene: &RenderScene,
-    tracer: &dyn Tracer,
+    tracer: &dyn DynAccel<Shape>,
     width: u32,
     height: u32,
     metric: Metric,
@@ -87,7 +88,10 @@ pub fn cost_map(
     let raster = scene.camera.raster(width, height);
     let values = per_pixel(width, height, progress, |x, y| {
         let mut counters = Counters::default();
-        tracer.closest_hit_counted(&raster.ray(x as f32 + 0.5, y as f32 + 0.5), &mut counters);
+        tracer.intersect_dyn(
+            &raster.ray(x as f32 + 0.5, y as f32 + 0.5),
+            Some(&mut counters),
+        );
         metric.of(&counters)
     })?;
     Ok(CostMap {

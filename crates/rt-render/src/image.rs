@@ -1,8 +1,9 @@
 //! Images, tiled parallel rendering and PNG output.
 
+use crate::RenderScene;
 use crate::whitted::Context;
-use crate::{RenderScene, Tracer};
 use rayon::prelude::*;
+use rt_core::DynAccel;
 use rt_core::Shape;
 use rt_core::glam::Vec3;
 use std::fmt;
@@ -155,7 +156,7 @@ pub const TILE: u32 = 16;
 pub fn render(
     scene: &RenderScene,
     shapes: &[Shape],
-    tracer: &dyn Tracer,
+    tracer: &dyn DynAccel<Shape>,
     options: &RenderOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> Result<Image, ImageError> {

@@ -14,8 +14,8 @@
 //!   pixel, several structures side by side on one colour scale with a legend.
 //! - [`slice_svg`]: a drawing of a structure's nodes or cells ([`rt_core::Accel::regions`])
 //!   where they meet an axis-aligned plane, with the mesh's cross-section, as SVG.
-//! - [`Tracer`]: the renderer's object-safe view of a structure, implemented by every
-//!   [`Accel`](rt_core::Accel) over [`Shape`](rt_core::Shape)s.
+//! - Any structure over [`Shape`](rt_core::Shape)s renders, seen through rt-core's object-safe
+//!   [`DynAccel`](rt_core::DynAccel): one call per ray crosses the trait object.
 //!
 //! Every correct structure renders the same bytes: the renderer re-derives each hit from the
 //! primitive the structure names, and the tie rule makes that primitive unique.
@@ -38,7 +38,6 @@ mod heatmap;
 mod image;
 mod scene;
 mod slice;
-mod tracer;
 mod whitted;
 
 pub use heatmap::{
@@ -47,7 +46,6 @@ pub use heatmap::{
 pub use image::{Image, ImageError, MAX_SIDE, RenderOptions, TILE, encode, render};
 pub use scene::{Material, PointLight, RenderScene, builtin_names, scene};
 pub use slice::{Coloring, SliceOptions, SliceSummary, cross_section, slice_svg, view_axes};
-pub use tracer::Tracer;
 
 /// The README's example, compiled and run as a doctest so that it stays true.
 #[cfg(doctest)]

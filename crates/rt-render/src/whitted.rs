@@ -3,14 +3,15 @@
 //! shadow ray sees, then a mirror ray and a refracted ray (Snell's law, Schlick's Fresnel
 //! weights, total internal reflection) where the material asks, to a fixed depth.
 
-use crate::{RenderScene, Tracer};
+use crate::RenderScene;
+use rt_core::DynAccel;
 use rt_core::{Hit, Primitive, Ray, Shape, SurfacePoint, glam::Vec3};
 
 /// Everything one pixel's rays need, borrowed once per render.
 pub(crate) struct Context<'a> {
     pub scene: &'a RenderScene,
     pub shapes: &'a [Shape],
-    pub tracer: &'a dyn Tracer,
+    pub tracer: &'a dyn DynAccel<Shape>,
     pub max_depth: u32,
 }
 
@@ -25,7 +26,7 @@ struct Surface {
 impl Context<'_> {
     /// The colour (linear RGB) seen along `ray`, which has `depth` bounces behind it.
     pub fn radiance(&self, ray: &Ray, depth: u32) -> Vec3 {
-        match self.tracer.closest_hit(ray) {
+        match self.tracer.intersect_dyn(ray, None) {
             Some(hit) => self.shade(ray, hit, depth),
             None => self.sky(ray.dir()),
         }
@@ -108,7 +109,10 @@ impl Context<'_> {
             if lambert <= 0.0 || geometric.dot(l) <= 0.0 {
                 continue;
             }
-            if self.tracer.any_hit(&at.spawn_ray_to(light.position)) {
+            if self
+                .tracer
+                .occluded_dyn(&at.spawn_ray_to(light.position), None)
+            {
                 continue;
             }
             let diffuse = albedo * (material.diffuse * opaque * lambert);

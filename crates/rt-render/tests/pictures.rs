@@ -2,12 +2,12 @@
 //! picture shows what the scene holds (a mirror reflects the floor, shadows are darker).
 
 use rt_bvh::{Bvh, BvhParams};
-use rt_core::{Accel, Primitive, Ray, Shape};
+use rt_core::{Accel, DynAccel, Primitive, Ray, Shape};
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
 use rt_kdtree::KdTree;
 use rt_octree::Octree;
-use rt_render::{Image, RenderOptions, RenderScene, Tracer, render};
+use rt_render::{Image, RenderOptions, RenderScene, render};
 
 const OPTIONS: RenderOptions = RenderOptions {
     width: 160,
@@ -15,12 +15,12 @@ const OPTIONS: RenderOptions = RenderOptions {
     depth: 5,
 };
 
-fn picture(scene: &RenderScene, tracer: &dyn Tracer) -> Image {
+fn picture(scene: &RenderScene, tracer: &dyn DynAccel<Shape>) -> Image {
     render(scene, &scene.shapes(), tracer, &OPTIONS, &|_, _| {}).unwrap()
 }
 
 /// Every structure with its default parameters, and the binary BVH, over `shapes`.
-fn structures(shapes: &[Shape]) -> Vec<(&'static str, Box<dyn Tracer>)> {
+fn structures(shapes: &[Shape]) -> Vec<(&'static str, Box<dyn DynAccel<Shape>>)> {
     vec![
         ("bvh", Box::new(Bvh::build(shapes, &Default::default()))),
         (

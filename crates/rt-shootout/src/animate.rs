@@ -10,7 +10,8 @@
 //! strategy's answers are checked against brute force over that frame's triangles on a subset
 //! of the rays.
 
-use crate::structures::{self, Entry, Query, Traceable};
+use crate::structures::{self, Entry, Query};
+use rt_core::DynAccel;
 use rt_core::{Aabb, Accel, BruteForce, Hit, Primitive, Ray, Triangle, predicted_cost};
 use rt_scene::motion::Animation;
 use rt_scene::scenes;
@@ -214,7 +215,7 @@ pub fn animate(args: &AnimateArgs, entries: &[Entry]) -> Result<AnimateReport, S
         })
         .collect();
 
-    let check = |s: &dyn Traceable, f: usize, update_ms: f64| {
+    let check = |s: &dyn DynAccel<Triangle>, f: usize, update_ms: f64| {
         measure(&pool, s, f, update_ms, &rays, &checked, &expected[f], args)
     };
     let mut tracks = Vec::new();
@@ -292,7 +293,7 @@ fn reference_answers(reference: &BruteForce<Triangle>, rays: &[Ray]) -> Vec<Opti
 #[allow(clippy::too_many_arguments)]
 fn measure(
     pool: &rayon::ThreadPool,
-    s: &dyn Traceable,
+    s: &dyn DynAccel<Triangle>,
     f: usize,
     update_ms: f64,
     rays: &[Ray],
@@ -300,18 +301,18 @@ fn measure(
     expected: &[Option<Hit>],
     args: &AnimateArgs,
 ) -> Frame {
-    let (answers, _) = pool.install(|| s.trace_counted(checked, Query::Closest));
+    let (answers, _) = pool.install(|| structures::trace_counted(&*s, checked, Query::Closest));
     let mismatches = answers
         .iter()
         .zip(expected)
         .filter(|(a, b)| !Hit::agree(**a, **b))
         .count();
     let trace_ms = fastest_ms(args.repeats, || {
-        std::hint::black_box(pool.install(|| s.trace_timed(rays, Query::Closest)));
+        std::hint::black_box(pool.install(|| structures::trace_timed(&*s, rays, Query::Closest)));
         Ok(())
     })
     .unwrap_or(f64::INFINITY);
-    let sah = predicted_cost(&s.regions()).map(|c| c.visits + c.tests);
+    let sah = predicted_cost(&s.regions_dyn()).map(|c| c.visits + c.tests);
     Frame {
         frame: f,
         update_ms,

@@ -6,15 +6,17 @@
 //! structures disagree. Reports build time, memory, tree shape, traversal cost per ray and
 //! speed, with brute force as the baseline row.
 
-use crate::structures::{self, Query, Traceable};
+use crate::structures::{self, Query};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rt_bvh::Bvh;
+use rt_core::DynAccel;
 use rt_core::{Aabb, Hit, PredictedCost, Primitive, Ray, Rng, Triangle, predicted_cost};
 use rt_scene::raygen;
 use rt_scene::scenes::{self, BUILTIN_SCENES};
 use std::fmt::Write as _;
 use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 mod points;
@@ -162,8 +164,12 @@ pub struct Row {
 /// The cost the surface area heuristic predicts per traced ray: its expectation for a line
 /// through the structure's box ([`predicted_cost`]), times the share of `rays` that enter the
 /// scene box (`bounds`), so that it compares with the measured averages over all rays.
-pub fn predicted_per_ray(s: &dyn Traceable, rays: &[Ray], bounds: &Aabb) -> Option<PredictedCost> {
-    let per_line = predicted_cost(&s.regions())?;
+pub fn predicted_per_ray(
+    s: &dyn DynAccel<Triangle>,
+    rays: &[Ray],
+    bounds: &Aabb,
+) -> Option<PredictedCost> {
+    let per_line = predicted_cost(&s.regions_dyn())?;
     let entering = rays
         .iter()
         .filter(|r| bounds.intersect(r, r.t_max).is_some())
@@ -393,7 +399,7 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
     let subset_rays: Vec<Ray> = subset.iter().map(|&i| rays[i]).collect();
 
     let mut rows = Vec::new();
-    let mut built: Vec<Box<dyn Traceable>> = Vec::new();
+    let mut built: Vec<Arc<dyn DynAccel<Triangle>>> = Vec::new();
     for entry in &entries {
         progress.step(format!("building {}", entry.name));
         let (s, build_ms) = build_fastest(|| source.build(entry), args.repeats)?;
@@ -467,7 +473,7 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
             .any(|r| first.is_some_and(|f| !agree(f, r.answers[i])))
         {
             settled += 1;
-            record(&mut rows, i, brute.answer(&rays[i], query));
+            record(&mut rows, i, structures::answer(&*brute, &rays[i], query));
         }
     }
     progress.done();
@@ -499,9 +505,9 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
 /// the fastest build's time in milliseconds. Builds are timed like traces, since a single build
 /// on a shared host can be 20% off (the structure is the same every time).
 fn build_fastest(
-    build: impl Fn() -> Result<Box<dyn Traceable>, String>,
+    build: impl Fn() -> Result<Arc<dyn DynAccel<Triangle>>, String>,
     repeats: u32,
-) -> Result<(Box<dyn Traceable>, f64), String> {
+) -> Result<(Arc<dyn DynAccel<Triangle>>, f64), String> {
     let mut build_ms = f64::INFINITY;
     let mut s = None;
     for _ in 0..repeats.max(1) {
@@ -575,23 +581,26 @@ impl Source {
     /// `entry`'s structure over the scene: built over the triangles, or built once over the mesh
     /// and instanced under rt-bvh's `Instances` (brute force: the linear reference, which
     /// visits every instance).
-    pub(crate) fn build(&self, entry: &structures::Entry) -> Result<Box<dyn Traceable>, String> {
+    pub(crate) fn build(
+        &self,
+        entry: &structures::Entry,
+    ) -> Result<Arc<dyn DynAccel<Triangle>>, String> {
         let Some(field) = &self.field else {
             return Ok((entry.build)(&self.mesh));
         };
         Ok(if entry.name == "brute-force" {
-            Box::new(
+            Arc::new(
                 structures::Field::<rt_core::LinearInstances<Triangle>>::new(
                     self.mesh.clone(),
                     field,
-                    &entry.build_bottom,
+                    &entry.build,
                 )?,
             )
         } else {
-            Box::new(structures::Field::<rt_bvh::Instances<Triangle>>::new(
+            Arc::new(structures::Field::<rt_bvh::Instances<Triangle>>::new(
                 self.mesh.clone(),
                 field,
-                &entry.build_bottom,
+                &entry.build,
             )?)
         })
     }
@@ -671,7 +680,7 @@ fn make_rays(args: &Args, source: &Source) -> Result<(Vec<Ray>, &'static str, Qu
             let hits: Vec<Option<Hit>> = primary
                 .iter()
                 .map(|r| {
-                    s.answer(r, Query::Closest).map(|h| {
+                    structures::answer(&*s, r, Query::Closest).map(|h| {
                         hit_tris.push(source.world_triangle(h.prim));
                         Hit {
                             prim: hit_tris.len() as u32 - 1,
@@ -694,14 +703,14 @@ fn make_rays(args: &Args, source: &Source) -> Result<(Vec<Ray>, &'static str, Qu
 
 fn trace_row(
     name: &str,
-    s: &dyn Traceable,
+    s: &dyn DynAccel<Triangle>,
     build_ms: f64,
     rays: &[Ray],
     query: Query,
     repeats: u32,
 ) -> Row {
     let t = Instant::now();
-    let (answers, counters) = s.trace_counted(rays, query);
+    let (answers, counters) = structures::trace_counted(s, rays, query);
     let mut best = t.elapsed();
     let mut hits = answers.iter().filter(|a| a.is_some()).count();
     if repeats > 0 {
@@ -709,7 +718,7 @@ fn trace_row(
     }
     for _ in 0..repeats {
         let t = Instant::now();
-        hits = s.trace_timed(rays, query);
+        hits = structures::trace_timed(s, rays, query);
         best = best.min(t.elapsed());
     }
     let mut row = Row::measured(name, s, build_ms, rays.len(), hits, counters, best);
@@ -722,19 +731,19 @@ impl Row {
     /// time over `queries` queries; the answers are left for the caller.
     fn measured(
         name: &str,
-        s: &dyn Traceable,
+        s: &dyn DynAccel<Triangle>,
         build_ms: f64,
         queries: usize,
         hits: usize,
         counters: rt_core::Counters,
         best: Duration,
     ) -> Self {
-        let stats = s.build_stats();
+        let stats = s.build_stats_dyn();
         let n = queries.max(1) as f64;
         Row {
             name: name.to_string(),
             build_ms,
-            memory_bytes: s.memory_bytes(),
+            memory_bytes: s.memory_bytes_dyn(),
             nodes: stats.nodes,
             leaves: stats.leaves,
             empty_leaves: stats.empty_leaves,

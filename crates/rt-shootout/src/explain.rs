@@ -112,7 +112,7 @@ fn explain_one(args: &ExplainArgs, entry: &Entry, triangles: &[Triangle], ray: &
     let ray = *ray;
     let built = (entry.build)(triangles);
     let query = if args.any { Query::Any } else { Query::Closest };
-    let (answer, trace) = built.trace(&ray, query);
+    let (answer, trace) = built.trace_dyn(&ray, query == Query::Any);
 
     let mut out = format!(
         "{} on {} ({} triangles), {} query\n",

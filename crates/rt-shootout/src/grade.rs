@@ -2,11 +2,13 @@
 //! each), and the shootout against reference structures, as JSON and Markdown for a teacher.
 
 use crate::compare::{self, Args, Report};
-use crate::structures::{self, Builder, Entry, Query, Traceable};
+use crate::structures::{self, Builder, Entry, Query};
 use rt_conformance::SCENES;
+use rt_core::DynAccel;
 use rt_core::{Accel, BuildStats, Hit, Region, Stats, Triangle};
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 /// A row's builder as the parameters of an [`Accel`], so the conformance kit, which checks
 /// types, can check a row it only knows as a builder.
@@ -21,7 +23,7 @@ impl std::fmt::Debug for RowParams {
 
 /// A built row as an [`Accel`]: each query asks the row and replays its counted events into the
 /// caller's sink.
-pub struct Row(Box<dyn Traceable>);
+pub struct Row(Arc<dyn DynAccel<Triangle>>);
 
 impl std::fmt::Debug for Row {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -32,20 +34,20 @@ impl std::fmt::Debug for Row {
 /// Asks the row, traced when the sink traces (so the kit's checks of the trace see the row's
 /// events), and replays what it reported into `stats`.
 fn ask<S: Stats>(
-    row: &dyn Traceable,
+    row: &dyn DynAccel<Triangle>,
     ray: &rt_core::Ray,
     query: Query,
     stats: &mut S,
 ) -> Option<Hit> {
     if S::TRACE {
-        let (hit, trace) = row.trace(ray, query);
+        let (hit, trace) = row.trace_dyn(ray, query == Query::Any);
         replay(trace.counters, stats);
         for e in trace.events {
             stats.event(e);
         }
         hit
     } else {
-        let (hit, c) = row.answer_counted(ray, query);
+        let (hit, c) = structures::answer_counted(row, ray, query);
         replay(c, stats);
         hit
     }
@@ -84,22 +86,22 @@ impl Accel for Row {
         ask(self.0.as_ref(), ray, Query::Any, stats).is_some()
     }
     fn bounds(&self) -> rt_core::Aabb {
-        self.0.bounds()
+        self.0.bounds_dyn()
     }
     /// The row's own ball query, its counts replayed into `stats` when it returns.
     fn ball_query<Q: rt_core::BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
         let mut c = rt_core::Counters::default();
-        self.0.ball_query_dyn(query, &mut c);
+        self.0.ball_query_dyn(query, Some(&mut c));
         replay(c, stats);
     }
     fn memory_bytes(&self) -> usize {
-        self.0.memory_bytes()
+        self.0.memory_bytes_dyn()
     }
     fn build_stats(&self) -> BuildStats {
-        self.0.build_stats()
+        self.0.build_stats_dyn()
     }
     fn regions(&self, visit: &mut dyn FnMut(Region)) {
-        for r in self.0.regions() {
+        for r in self.0.regions_dyn() {
             visit(r);
         }
     }

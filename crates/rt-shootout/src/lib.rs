@@ -36,7 +36,7 @@ pub mod scale;
 pub mod structures;
 
 pub use compare::{Args, Report, Row};
-pub use structures::{Entry, Traceable, entries_of, entries_of_triangles};
+pub use structures::{Entry, entries_of, entries_of_triangles};
 
 use clap::{CommandFactory, FromArgMatches, Parser};
 use rt_core::{Accel, Shape, Triangle};

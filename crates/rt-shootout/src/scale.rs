@@ -229,9 +229,12 @@ pub fn scale(args: &ScaleArgs, entries: &[Entry]) -> Result<ScaleReport, String>
             let build_ms = start.elapsed().as_secs_f64() * 1e3;
             let peak = memory::peak().zip(before).map(|(p, b)| p.saturating_sub(b));
             // The checked sample first: it also warms the caches and the pool's threads.
-            let (answers, _) = pool.install(|| built.trace_counted(&sample, Query::Closest));
+            let (answers, _) =
+                pool.install(|| structures::trace_counted(&*built, &sample, Query::Closest));
             let start = Instant::now();
-            std::hint::black_box(pool.install(|| built.trace_timed(&rays, Query::Closest)));
+            std::hint::black_box(
+                pool.install(|| structures::trace_timed(&*built, &rays, Query::Closest)),
+            );
             let trace_ns_per_ray = start.elapsed().as_secs_f64() * 1e9 / rays.len() as f64;
             let disagreements = match &reference {
                 None => {
@@ -249,7 +252,7 @@ pub fn scale(args: &ScaleArgs, entries: &[Entry]) -> Result<ScaleReport, String>
                 triangles: tris.len(),
                 build_ms,
                 trace_ns_per_ray,
-                structure_bytes: built.memory_bytes(),
+                structure_bytes: built.memory_bytes_dyn(),
                 peak_build_bytes: peak,
                 disagreements,
             });

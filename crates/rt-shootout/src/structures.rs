@@ -1,21 +1,23 @@
-//! The rows of a shootout: structure types and presets behind one object-safe interface.
+//! The rows of a shootout: structure types and presets, each built as an
+//! [`rt_core::DynAccel`] (the one object-safe view of any structure), and the parallel passes
+//! every command makes over them.
 //!
 //! [`rt_core::Accel`] is generic (and so not object-safe); a shootout needs a list. Each
-//! [`Entry`] wraps one structure type and preset. Dispatch is dynamic only per batch of rays: the
-//! batch loop itself is monomorphized, so timings measure the structure, not the wrapper.
+//! [`Entry`] builds one structure type and preset. Dispatch is dynamic only per chunk of rays:
+//! the chunk's loop ([`DynAccel::intersect_all`] and its kin) is compiled for the structure, so
+//! timings measure the structure, not the trait object.
 
 use rayon::prelude::*;
 use rt_bvh::Bvh;
 use rt_core::glam::Vec3;
 use rt_core::{
-    Aabb, Accel, BallQuery, Bottom, BruteForce, BuildStats, Counters, Hit, Instance, PointHit, Ray,
-    Refit, RefitError, Region, Shape, Stats, Trace, Triangle, TwoLevel,
+    Aabb, Accel, BallQuery, BruteForce, BuildStats, Counters, DynAccel, Hit, Instance, NoStats,
+    PointHit, Ray, Refit, RefitError, Region, Shape, Stats, Trace, Triangle, TwoLevel,
 };
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
 use rt_kdtree::KdTree;
 use rt_octree::Octree;
-use rt_render::Tracer;
 use std::sync::Arc;
 
 /// Which query a run makes.
@@ -27,38 +29,9 @@ pub enum Query {
     Any,
 }
 
-/// A built structure, ready to trace.
-pub trait Traceable: Send + Sync {
-    /// [`Accel::memory_bytes`].
-    fn memory_bytes(&self) -> usize;
-    /// [`Accel::build_stats`].
-    fn build_stats(&self) -> BuildStats;
-    /// Answers for every ray, with counters, in parallel over the current rayon pool.
-    fn trace_counted(&self, rays: &[Ray], query: Query) -> (Vec<Option<Hit>>, Counters);
-    /// Traces every ray without counters and returns the number of hits (so the work cannot be
-    /// optimized away). This is the timed path.
-    fn trace_timed(&self, rays: &[Ray], query: Query) -> usize;
-    /// One ray, for re-checking a disagreement.
-    fn answer(&self, ray: &Ray, query: Query) -> Option<Hit>;
-    /// One ray, with the events it caused (for the conformance kit, through [`crate::grade`]).
-    fn answer_counted(&self, ray: &Ray, query: Query) -> (Option<Hit>, Counters);
-    /// One ray with every step of its walk recorded (for `explain`).
-    fn trace(&self, ray: &Ray, query: Query) -> (Option<Hit>, Trace);
-    /// Every node or cell ([`Accel::regions`]), for `draw`.
-    fn regions(&self) -> Vec<Region>;
-    /// [`Accel::bounds`].
-    fn bounds(&self) -> Aabb;
-    /// [`Accel::ball_query`] for a query known only as a trait object, counting into `counters`.
-    fn ball_query_dyn(&self, query: &mut dyn BallQuery<Triangle>, counters: &mut Counters);
-    /// The closest point for every `(point, maximum distance)`, with counters, in parallel over
-    /// the current rayon pool.
-    fn closest_counted(&self, points: &[(Vec3, f32)]) -> (Vec<Option<PointHit>>, Counters);
-    /// The closest points without counters; returns how many were found. The timed path.
-    fn closest_timed(&self, points: &[(Vec3, f32)]) -> usize;
-}
-
-/// A built structure that can also follow its triangles when they move ([`Refit`]).
-pub trait Refittable: Traceable {
+/// A built structure that can also follow its triangles when they move ([`Refit`]): an
+/// extension of [`DynAccel`] for `animate`.
+pub trait Refittable: DynAccel<Triangle> {
     /// [`Refit::refit`] to `tris`.
     ///
     /// # Errors
@@ -66,14 +39,13 @@ pub trait Refittable: Traceable {
     fn refit(&mut self, tris: &[Triangle]) -> Result<(), RefitError>;
 }
 
-struct Built<A>(A);
-
-impl<A: Refit<Prim = Triangle>> Refittable for Built<A> {
+impl<A: Refit<Prim = Triangle>> Refittable for A {
     fn refit(&mut self, tris: &[Triangle]) -> Result<(), RefitError> {
-        self.0.refit(tris)
+        Refit::refit(self, tris)
     }
 }
 
+/// Queries per task of the parallel passes; the trait object is crossed once per task.
 const CHUNK: usize = 256;
 const OCCLUDED: Hit = Hit {
     prim: u32::MAX,
@@ -82,135 +54,133 @@ const OCCLUDED: Hit = Hit {
     v: 0.0,
 };
 
-/// Answers `items` in parallel chunks over the current rayon pool, each chunk counting into its
-/// own [`Counters`], and the counters summed: the counted pass of every row.
-fn answer_all<T: Sync, A: Send + Clone + Default>(
+/// Every item's answer, filled in parallel chunks over the current rayon pool, each chunk
+/// counting into its own [`Counters`], and the counters summed: the counted passes.
+fn counted_chunks<T: Sync, A: Clone + Send>(
     items: &[T],
-    answer: impl Fn(&T, &mut Counters) -> A + Sync,
-) -> (Vec<A>, Counters) {
-    let mut answers = vec![A::default(); items.len()];
+    fill: impl Fn(&[T], &mut [Option<A>], &mut Counters) + Sync,
+) -> (Vec<Option<A>>, Counters) {
+    let mut answers = vec![None; items.len()];
     let counters = answers
         .par_chunks_mut(CHUNK)
         .zip(items.par_chunks(CHUNK))
         .map(|(out, items)| {
             let mut c = Counters::default();
-            for (o, item) in out.iter_mut().zip(items) {
-                *o = answer(item, &mut c);
-            }
+            fill(items, out, &mut c);
             c
         })
         .reduce(Counters::default, Counters::merged);
     (answers, counters)
 }
 
-impl<A: Accel<Prim = Triangle>> Built<A> {
-    /// One query with a fresh sink of type `S`, and the sink.
-    fn ask<S: Stats + Default>(&self, ray: &Ray, query: Query) -> (Option<Hit>, S) {
-        let mut stats = S::default();
-        let answer = match query {
-            Query::Closest => self.0.intersect_with(ray, &mut stats),
-            Query::Any => self.0.occluded_with(ray, &mut stats).then_some(OCCLUDED),
-        };
-        (answer, stats)
-    }
-}
-
-impl<A: Accel<Prim = Triangle>> Traceable for Built<A> {
-    fn memory_bytes(&self) -> usize {
-        self.0.memory_bytes()
-    }
-
-    fn build_stats(&self) -> BuildStats {
-        self.0.build_stats()
-    }
-
-    fn trace_counted(&self, rays: &[Ray], query: Query) -> (Vec<Option<Hit>>, Counters) {
-        answer_all(rays, |r, c| match query {
-            Query::Closest => self.0.intersect_with(r, c),
-            Query::Any => self.0.occluded_with(r, c).then_some(OCCLUDED),
-        })
-    }
-
-    fn trace_timed(&self, rays: &[Ray], query: Query) -> usize {
-        rays.par_chunks(CHUNK)
-            .map(|rays| match query {
-                Query::Closest => rays
-                    .iter()
-                    .filter(|r| self.0.intersect(r).is_some())
-                    .count(),
-                Query::Any => rays.iter().filter(|r| self.0.occluded(r)).count(),
-            })
-            .sum()
-    }
-
-    fn regions(&self) -> Vec<Region> {
-        let mut out = Vec::new();
-        self.0.regions(&mut |r| out.push(r));
-        out
-    }
-
-    fn answer(&self, ray: &Ray, query: Query) -> Option<Hit> {
-        match query {
-            Query::Closest => self.0.intersect(ray),
-            Query::Any => self.0.occluded(ray).then_some(OCCLUDED),
+/// One task's answers to `rays` into `out`, counted into `counters` if given.
+fn answer_chunk(
+    s: &dyn DynAccel<Triangle>,
+    rays: &[Ray],
+    query: Query,
+    out: &mut [Option<Hit>],
+    counters: Option<&mut Counters>,
+) {
+    match query {
+        Query::Closest => s.intersect_all(rays, out, counters),
+        Query::Any => {
+            let mut blocked = [false; CHUNK];
+            let blocked = &mut blocked[..rays.len().min(CHUNK)];
+            s.occluded_all(rays, blocked, counters);
+            for (o, &b) in out.iter_mut().zip(blocked.iter()) {
+                *o = b.then_some(OCCLUDED);
+            }
         }
     }
+}
 
-    fn answer_counted(&self, ray: &Ray, query: Query) -> (Option<Hit>, Counters) {
-        self.ask(ray, query)
-    }
+/// Every ray's answer, with the counters of all of them: the counted pass of every row, in
+/// parallel chunks over the current rayon pool, each chunk counting into its own [`Counters`].
+pub fn trace_counted(
+    s: &dyn DynAccel<Triangle>,
+    rays: &[Ray],
+    query: Query,
+) -> (Vec<Option<Hit>>, Counters) {
+    counted_chunks(rays, |rays, out, c| {
+        answer_chunk(s, rays, query, out, Some(c))
+    })
+}
 
-    fn bounds(&self) -> Aabb {
-        self.0.bounds()
-    }
+/// Traces every ray without counters and returns the number of hits (so the work cannot be
+/// optimized away): the timed pass, in parallel chunks over the current rayon pool.
+pub fn trace_timed(s: &dyn DynAccel<Triangle>, rays: &[Ray], query: Query) -> usize {
+    rays.par_chunks(CHUNK)
+        .map(|rays| {
+            let mut out = [None; CHUNK];
+            let out = &mut out[..rays.len()];
+            answer_chunk(s, rays, query, out, None);
+            out.iter().filter(|h| h.is_some()).count()
+        })
+        .sum()
+}
 
-    fn ball_query_dyn(&self, mut query: &mut dyn BallQuery<Triangle>, counters: &mut Counters) {
-        self.0.ball_query(&mut query, counters);
-    }
+/// One ray's answer, and the events it caused.
+pub fn answer_counted(
+    s: &dyn DynAccel<Triangle>,
+    ray: &Ray,
+    query: Query,
+) -> (Option<Hit>, Counters) {
+    let mut c = Counters::default();
+    let answer = match query {
+        Query::Closest => s.intersect_dyn(ray, Some(&mut c)),
+        Query::Any => s.occluded_dyn(ray, Some(&mut c)).then_some(OCCLUDED),
+    };
+    (answer, c)
+}
 
-    fn closest_counted(&self, points: &[(Vec3, f32)]) -> (Vec<Option<PointHit>>, Counters) {
-        answer_all(points, |&(p, max), c| self.0.closest_point_with(p, max, c))
-    }
-
-    fn closest_timed(&self, points: &[(Vec3, f32)]) -> usize {
-        points
-            .par_chunks(CHUNK)
-            .map(|points| {
-                points
-                    .iter()
-                    .filter(|&&(p, max)| self.0.closest_point(p, max).is_some())
-                    .count()
-            })
-            .sum()
-    }
-
-    fn trace(&self, ray: &Ray, query: Query) -> (Option<Hit>, Trace) {
-        self.ask(ray, query)
+/// One ray's answer.
+pub fn answer(s: &dyn DynAccel<Triangle>, ray: &Ray, query: Query) -> Option<Hit> {
+    match query {
+        Query::Closest => s.intersect_dyn(ray, None),
+        Query::Any => s.occluded_dyn(ray, None).then_some(OCCLUDED),
     }
 }
 
-/// Builds one row's structure over a scene.
-pub type Builder = Arc<dyn Fn(&[Triangle]) -> Box<dyn Traceable> + Send + Sync>;
+/// The closest point for every `(point, maximum distance)`, with the counters of all of them, in
+/// parallel chunks over the current rayon pool.
+pub fn closest_counted(
+    s: &dyn DynAccel<Triangle>,
+    points: &[(Vec3, f32)],
+) -> (Vec<Option<PointHit>>, Counters) {
+    counted_chunks(points, |points, out, c| {
+        s.closest_points_all(points, out, Some(c))
+    })
+}
+
+/// The closest points without counters; returns how many were found. The timed pass.
+pub fn closest_timed(s: &dyn DynAccel<Triangle>, points: &[(Vec3, f32)]) -> usize {
+    points
+        .par_chunks(CHUNK)
+        .map(|points| {
+            let mut out = [None; CHUNK];
+            let out = &mut out[..points.len()];
+            s.closest_points_all(points, out, None);
+            out.iter().filter(|h| h.is_some()).count()
+        })
+        .sum()
+}
+
+/// Builds one row's structure over a scene (shared, so that instances can hold it too).
+pub type Builder = Arc<dyn Fn(&[Triangle]) -> Arc<dyn DynAccel<Triangle>> + Send + Sync>;
 
 /// Builds one row's structure over a scene as one that can refit (`animate`).
 pub type RefitBuilder = Arc<dyn Fn(&[Triangle]) -> Box<dyn Refittable> + Send + Sync>;
 
-/// Builds one row's structure over a mesh as the bottom level of instances (`compare
-/// --instances`).
-pub type BottomBuilder = Arc<dyn Fn(&[Triangle]) -> Arc<dyn Bottom<Triangle>> + Send + Sync>;
-
 /// Builds one row's structure over triangles and spheres, for `render`.
-pub type ShapeBuilder = Arc<dyn Fn(&[Shape]) -> Box<dyn Tracer> + Send + Sync>;
+pub type ShapeBuilder = Arc<dyn Fn(&[Shape]) -> Box<dyn DynAccel<Shape>> + Send + Sync>;
 
 /// One row a shootout can run: a structure type with one preset.
 #[derive(Clone)]
 pub struct Entry {
     /// Row name: the structure's [`Accel::NAME`] for its first preset, `NAME-preset` otherwise.
     pub name: String,
-    /// Builds it over triangles.
+    /// Builds it over triangles (also the bottom level of `compare --instances`).
     pub build: Builder,
-    /// Builds the same over one mesh, to be shared by instances.
-    pub build_bottom: BottomBuilder,
     /// Builds the same type and preset over [`Shape`]s, when the structure is generic over its
     /// primitive (see [`entries_of`]); `None` for triangle-only structures, which `render`
     /// cannot use.
@@ -250,17 +220,13 @@ where
         .enumerate()
         .map(|(i, (preset, params))| {
             let for_shapes = params.clone();
-            let for_bottom = params.clone();
             Entry {
                 name: row_name::<A>(i, preset),
                 build: Arc::new(move |tris: &[Triangle]| {
-                    Box::new(Built(A::build(tris, &params))) as Box<dyn Traceable>
-                }),
-                build_bottom: Arc::new(move |tris: &[Triangle]| {
-                    Arc::new(A::build(tris, &for_bottom)) as Arc<dyn Bottom<Triangle>>
+                    Arc::new(A::build(tris, &params)) as Arc<dyn DynAccel<Triangle>>
                 }),
                 build_shapes: Some(Arc::new(move |shapes: &[Shape]| {
-                    Box::new(S::build(shapes, &for_shapes)) as Box<dyn Tracer>
+                    Box::new(S::build(shapes, &for_shapes)) as Box<dyn DynAccel<Shape>>
                 })),
                 build_refittable: None,
             }
@@ -277,19 +243,13 @@ where
     A::presets()
         .into_iter()
         .enumerate()
-        .map(|(i, (preset, params))| {
-            let for_bottom = params.clone();
-            Entry {
-                name: row_name::<A>(i, preset),
-                build: Arc::new(move |tris: &[Triangle]| {
-                    Box::new(Built(A::build(tris, &params))) as Box<dyn Traceable>
-                }),
-                build_bottom: Arc::new(move |tris: &[Triangle]| {
-                    Arc::new(A::build(tris, &for_bottom)) as Arc<dyn Bottom<Triangle>>
-                }),
-                build_shapes: None,
-                build_refittable: None,
-            }
+        .map(|(i, (preset, params))| Entry {
+            name: row_name::<A>(i, preset),
+            build: Arc::new(move |tris: &[Triangle]| {
+                Arc::new(A::build(tris, &params)) as Arc<dyn DynAccel<Triangle>>
+            }),
+            build_shapes: None,
+            build_refittable: None,
         })
         .collect()
 }
@@ -306,7 +266,7 @@ where
         .zip(A::presets())
         .map(|(mut entry, (_, params))| {
             entry.build_refittable = Some(Arc::new(move |tris: &[Triangle]| {
-                Box::new(Built(A::build(tris, &params))) as Box<dyn Refittable>
+                Box::new(A::build(tris, &params)) as Box<dyn Refittable>
             }));
             entry
         })
@@ -387,7 +347,7 @@ impl<T: TwoLevel<Triangle>> Field<T> {
     pub fn new(
         mesh: Arc<[Triangle]>,
         transforms: &[rt_core::glam::Affine3A],
-        bottom: &BottomBuilder,
+        bottom: &Builder,
     ) -> Result<Self, String> {
         if (mesh.len() as u64) * (transforms.len() as u64) >= u64::from(u32::MAX) {
             return Err(format!(
@@ -434,65 +394,56 @@ impl<T: TwoLevel<Triangle>> Field<T> {
     }
 }
 
-impl<T: TwoLevel<Triangle>> Traceable for Field<T> {
-    fn memory_bytes(&self) -> usize {
+/// A field as a structure: the flattened scene's numbering, the two-level walk's counts.
+impl<T: TwoLevel<Triangle>> DynAccel<Triangle> for Field<T> {
+    fn name(&self) -> &'static str {
+        "instances"
+    }
+
+    fn bounds_dyn(&self) -> Aabb {
+        self.scene.bounds()
+    }
+
+    fn memory_bytes_dyn(&self) -> usize {
         self.scene.memory_bytes()
     }
 
     /// The bottom level's shape, with the number of instances among the named figures.
-    fn build_stats(&self) -> BuildStats {
+    fn build_stats_dyn(&self) -> BuildStats {
         let instances = self.scene.instances();
         let mut stats = instances
             .first()
-            .map(|i| i.bottom().build_stats())
+            .map(|i| i.bottom().build_stats_dyn())
             .unwrap_or_default();
         stats.extra.push(("instances", instances.len() as f64));
         stats
     }
 
-    fn trace_counted(&self, rays: &[Ray], query: Query) -> (Vec<Option<Hit>>, Counters) {
-        answer_all(rays, |r, c| self.ask(r, query, c))
-    }
-
-    fn trace_timed(&self, rays: &[Ray], query: Query) -> usize {
-        rays.par_chunks(CHUNK)
-            .map(|rays| match query {
-                Query::Closest => rays
-                    .iter()
-                    .filter(|r| self.scene.intersect(r).is_some())
-                    .count(),
-                Query::Any => rays.iter().filter(|r| self.scene.occluded(r)).count(),
-            })
-            .sum()
-    }
-
-    fn answer(&self, ray: &Ray, query: Query) -> Option<Hit> {
-        self.ask(ray, query, &mut rt_core::NoStats)
-    }
-
-    fn answer_counted(&self, ray: &Ray, query: Query) -> (Option<Hit>, Counters) {
-        let mut c = Counters::default();
-        (self.ask(ray, query, &mut c), c)
-    }
-
-    /// Counts only: the two-level walk reports no steps.
-    fn trace(&self, ray: &Ray, query: Query) -> (Option<Hit>, Trace) {
-        let mut t = Trace::default();
-        (self.ask(ray, query, &mut t), t)
-    }
-
     /// None: a field is drawn as its instances, which `draw` does not do.
-    fn regions(&self) -> Vec<Region> {
+    fn regions_dyn(&self) -> Vec<Region> {
         Vec::new()
     }
 
-    fn bounds(&self) -> Aabb {
-        self.scene.bounds()
+    fn intersect_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> Option<Hit> {
+        match counters {
+            Some(c) => self.ask(ray, Query::Closest, c),
+            None => self.ask(ray, Query::Closest, &mut NoStats),
+        }
+    }
+
+    fn occluded_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> bool {
+        match counters {
+            Some(c) => self.ask(ray, Query::Any, c),
+            None => self.ask(ray, Query::Any, &mut NoStats),
+        }
+        .is_some()
     }
 
     /// Offers every world-space triangle of every instance whose box the ball reaches (the
     /// flattened scene, as brute force would), numbered as hits are.
-    fn ball_query_dyn(&self, query: &mut dyn BallQuery<Triangle>, counters: &mut Counters) {
+    fn ball_query_dyn(&self, query: &mut dyn BallQuery<Triangle>, counters: Option<&mut Counters>) {
+        let mut none = Counters::default();
+        let counters = counters.unwrap_or(&mut none);
         let n = self.mesh.len() as u32;
         for (k, inst) in self.scene.instances().iter().enumerate() {
             counters.node_visit();
@@ -511,19 +462,40 @@ impl<T: TwoLevel<Triangle>> Traceable for Field<T> {
         }
     }
 
-    fn closest_counted(&self, points: &[(Vec3, f32)]) -> (Vec<Option<PointHit>>, Counters) {
-        answer_all(points, |&(p, max), c| self.point(p, max, c))
+    /// Counts only: the two-level walk reports no steps.
+    fn trace_dyn(&self, ray: &Ray, any: bool) -> (Option<Hit>, Trace) {
+        let mut t = Trace::default();
+        let query = if any { Query::Any } else { Query::Closest };
+        (self.ask(ray, query, &mut t), t)
     }
 
-    fn closest_timed(&self, points: &[(Vec3, f32)]) -> usize {
-        points
-            .par_chunks(CHUNK)
-            .map(|points| {
-                points
-                    .iter()
-                    .filter(|&&(p, max)| self.scene.closest_point(p, max).is_some())
-                    .count()
-            })
-            .sum()
+    fn intersect_all(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        mut counters: Option<&mut Counters>,
+    ) {
+        for (o, r) in out.iter_mut().zip(rays) {
+            *o = self.intersect_dyn(r, counters.as_deref_mut());
+        }
+    }
+
+    fn occluded_all(&self, rays: &[Ray], out: &mut [bool], mut counters: Option<&mut Counters>) {
+        for (o, r) in out.iter_mut().zip(rays) {
+            *o = self.occluded_dyn(r, counters.as_deref_mut());
+        }
+    }
+
+    fn closest_points_all(
+        &self,
+        points: &[(Vec3, f32)],
+        out: &mut [Option<PointHit>],
+        counters: Option<&mut Counters>,
+    ) {
+        let mut none = Counters::default();
+        let counters = counters.unwrap_or(&mut none);
+        for (o, &(p, max)) in out.iter_mut().zip(points) {
+            *o = self.point(p, max, counters);
+        }
     }
 }

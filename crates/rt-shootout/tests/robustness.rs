@@ -37,15 +37,16 @@ fn every_row_builds_and_answers_the_same_on_one_thread_and_on_two() {
     for row in rows() {
         let one = on(1, || (row.build)(&tris));
         let two = on(2, || (row.build)(&tris));
-        assert_eq!(one.build_stats(), two.build_stats(), "{}", row.name);
+        assert_eq!(one.build_stats_dyn(), two.build_stats_dyn(), "{}", row.name);
         assert!(
-            one.regions() == two.regions(),
+            one.regions_dyn() == two.regions_dyn(),
             "{}: the trees differ between one and two build threads",
             row.name
         );
         for query in [Query::Closest, Query::Any] {
-            let (a, ca): (Vec<_>, Counters) = on(1, || one.trace_counted(&rays, query));
-            let (b, cb) = on(2, || two.trace_counted(&rays, query));
+            let (a, ca): (Vec<_>, Counters) =
+                on(1, || structures::trace_counted(&*one, &rays, query));
+            let (b, cb) = on(2, || structures::trace_counted(&*two, &rays, query));
             let differ = a.iter().zip(&b).position(|(x, y)| bits(*x) != bits(*y));
             if let Some(i) = differ {
                 panic!(
@@ -85,7 +86,7 @@ fn no_ray_escapes_a_closed_sphere_near_or_far_from_the_origin() {
         for row in rows() {
             let built = (row.build)(&tris);
             for query in [Query::Closest, Query::Any] {
-                let (answers, _) = built.trace_counted(&rays, query);
+                let (answers, _) = structures::trace_counted(&*built, &rays, query);
                 if let Some(i) = answers.iter().position(Option::is_none) {
                     panic!(
                         "{} {query:?}: the ray {} escapes the sphere centred {offset} from the \

@@ -5,9 +5,10 @@
 //! every point on which they disagree, as for rays.
 
 use super::{Args, Report, Row, Source, build_fastest, checked_subset};
-use crate::structures::{self, Traceable};
+use crate::structures;
 use rt_core::glam::Vec3;
 use rt_core::{Aabb, PointHit, Primitive};
+use rt_core::{DynAccel, Triangle};
 use rt_scene::raygen;
 use std::time::{Duration, Instant};
 
@@ -108,7 +109,7 @@ pub(super) fn measure(
             .any(|a| first.is_some_and(|f| !PointHit::agree(f, a[i])))
         {
             settled += 1;
-            let (expected, _) = brute.closest_counted(&queries[i..=i]);
+            let (expected, _) = structures::closest_counted(&*brute, &queries[i..=i]);
             record(&mut rows, i, expected[0]);
         }
     }
@@ -139,13 +140,13 @@ pub(super) fn measure(
 /// none, the counted pass is timed).
 fn query_row(
     name: &str,
-    s: &dyn Traceable,
+    s: &dyn DynAccel<Triangle>,
     build_ms: f64,
     queries: &[(Vec3, f32)],
     repeats: u32,
 ) -> (Row, Vec<Option<PointHit>>) {
     let t = Instant::now();
-    let (found, counters) = s.closest_counted(queries);
+    let (found, counters) = structures::closest_counted(s, queries);
     let mut best = t.elapsed();
     let mut hits = found.iter().filter(|a| a.is_some()).count();
     if repeats > 0 {
@@ -153,7 +154,7 @@ fn query_row(
     }
     for _ in 0..repeats {
         let t = Instant::now();
-        hits = s.closest_timed(queries);
+        hits = structures::closest_timed(s, queries);
         best = best.min(t.elapsed());
     }
     let row = Row::measured(name, s, build_ms, queries.len(), hits, counters, best);

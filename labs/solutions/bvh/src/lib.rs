@@ -163,7 +163,7 @@ impl LabBvh {
     /// box holding what lies below it, every node reached exactly once, every valid triangle in
     /// exactly one leaf and no invalid one in any, no leaf empty, depth within [`MAX_DEPTH`].
     pub fn validate(&self) -> Result<(), ValidationError> {
-        let err = |s: String| Err(ValidationError(s));
+        let err = |s: String| Err(ValidationError::new(s));
         let valid = self.tris.iter().filter(|t| t.is_valid()).count();
         if self.nodes.is_empty() {
             return if valid == 0 && self.ids.is_empty() {

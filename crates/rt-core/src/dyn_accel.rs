@@ -1,0 +1,161 @@
+//! Any structure as a trait object: [`DynAccel`].
+
+use crate::trace::Trace;
+use crate::{Aabb, Accel, BallQuery, BuildStats, Counters, Hit, NoStats, PointHit, Ray, Region};
+use glam::Vec3;
+
+/// Any [`Accel`] as a trait object: a structure chosen at run time, bottom levels of several
+/// kinds in one two-level scene ([`Instance`](crate::Instance)), a row of the shootout, the
+/// structure a renderer traces. Every `Accel` is one.
+///
+/// Every method ends in `_dyn` or `_all`, so that calling a structure's own [`Accel`] methods
+/// is never ambiguous where both traits are in scope. The single queries take `Some(counters)`
+/// to count their events and `None` to run the uncounted traversal. The `_all` methods answer a whole slice of queries in one call: their
+/// loop is compiled for the structure, so a caller crossing the trait object once per slice pays
+/// no dynamic dispatch per ray.
+///
+/// ```
+/// use rt_core::{Accel, BruteForce, DynAccel, Ray, Triangle, glam::Vec3};
+///
+/// let tris = [Triangle::new(Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::Y)];
+/// let chosen: Box<dyn DynAccel<Triangle>> = Box::new(BruteForce::build(&tris, &()));
+/// let rays = [Ray::new(Vec3::new(0.0, 0.0, -1.0), Vec3::Z), Ray::new(Vec3::X * 5.0, Vec3::Z)];
+/// let mut hits = [None; 2];
+/// chosen.intersect_all(&rays, &mut hits, None);
+/// assert_eq!(hits.map(|h| h.map(|h| h.prim)), [Some(0), None]);
+/// ```
+pub trait DynAccel<P>: Send + Sync {
+    /// [`Accel::NAME`].
+    fn name(&self) -> &'static str;
+    /// [`Accel::bounds`].
+    fn bounds_dyn(&self) -> Aabb;
+    /// [`Accel::memory_bytes`].
+    fn memory_bytes_dyn(&self) -> usize;
+    /// [`Accel::build_stats`].
+    fn build_stats_dyn(&self) -> BuildStats;
+    /// [`Accel::regions`], collected.
+    fn regions_dyn(&self) -> Vec<Region>;
+    /// [`Accel::intersect`], counted into `counters` if given.
+    fn intersect_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> Option<Hit>;
+    /// [`Accel::occluded`], counted into `counters` if given.
+    fn occluded_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> bool;
+    /// [`Accel::ball_query`], counted into `counters` if given.
+    fn ball_query_dyn(&self, query: &mut dyn BallQuery<P>, counters: Option<&mut Counters>);
+    /// One closest-hit (`any == false`) or any-hit query with every step of its walk recorded
+    /// ([`Trace`]); an any-hit answer is `Some` with primitive `u32::MAX` when occluded.
+    fn trace_dyn(&self, ray: &Ray, any: bool) -> (Option<Hit>, Trace);
+    /// [`Accel::intersect`] for each ray into the same slot of `out` (as many as both have),
+    /// counted into `counters` if given.
+    fn intersect_all(&self, rays: &[Ray], out: &mut [Option<Hit>], counters: Option<&mut Counters>);
+    /// [`Accel::occluded`] for each ray into the same slot of `out` (as many as both have),
+    /// counted into `counters` if given.
+    fn occluded_all(&self, rays: &[Ray], out: &mut [bool], counters: Option<&mut Counters>);
+    /// [`Accel::closest_point`] for each `(point, max_distance)` into the same slot of `out` (as
+    /// many as both have), counted into `counters` if given.
+    fn closest_points_all(
+        &self,
+        points: &[(Vec3, f32)],
+        out: &mut [Option<PointHit>],
+        counters: Option<&mut Counters>,
+    );
+}
+
+impl<A: Accel> DynAccel<A::Prim> for A {
+    fn name(&self) -> &'static str {
+        A::NAME
+    }
+
+    fn bounds_dyn(&self) -> Aabb {
+        Accel::bounds(self)
+    }
+
+    fn memory_bytes_dyn(&self) -> usize {
+        Accel::memory_bytes(self)
+    }
+
+    fn build_stats_dyn(&self) -> BuildStats {
+        Accel::build_stats(self)
+    }
+
+    fn regions_dyn(&self) -> Vec<Region> {
+        let mut out = Vec::new();
+        Accel::regions(self, &mut |r| out.push(r));
+        out
+    }
+
+    #[inline]
+    fn intersect_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> Option<Hit> {
+        match counters {
+            Some(c) => self.intersect_with(ray, c),
+            None => self.intersect_with(ray, &mut NoStats),
+        }
+    }
+
+    #[inline]
+    fn occluded_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> bool {
+        match counters {
+            Some(c) => self.occluded_with(ray, c),
+            None => self.occluded_with(ray, &mut NoStats),
+        }
+    }
+
+    fn ball_query_dyn(
+        &self,
+        mut query: &mut dyn BallQuery<A::Prim>,
+        counters: Option<&mut Counters>,
+    ) {
+        match counters {
+            Some(c) => self.ball_query(&mut query, c),
+            None => self.ball_query(&mut query, &mut NoStats),
+        }
+    }
+
+    fn trace_dyn(&self, ray: &Ray, any: bool) -> (Option<Hit>, Trace) {
+        let mut trace = Trace::default();
+        let answer = if any {
+            self.occluded_with(ray, &mut trace).then_some(Hit {
+                prim: u32::MAX,
+                t: f32::NAN,
+                u: 0.0,
+                v: 0.0,
+            })
+        } else {
+            self.intersect_with(ray, &mut trace)
+        };
+        (answer, trace)
+    }
+
+    fn intersect_all(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        counters: Option<&mut Counters>,
+    ) {
+        let pairs = out.iter_mut().zip(rays);
+        match counters {
+            Some(c) => pairs.for_each(|(o, r)| *o = self.intersect_with(r, c)),
+            None => pairs.for_each(|(o, r)| *o = self.intersect_with(r, &mut NoStats)),
+        }
+    }
+
+    fn occluded_all(&self, rays: &[Ray], out: &mut [bool], counters: Option<&mut Counters>) {
+        let pairs = out.iter_mut().zip(rays);
+        match counters {
+            Some(c) => pairs.for_each(|(o, r)| *o = self.occluded_with(r, c)),
+            None => pairs.for_each(|(o, r)| *o = self.occluded_with(r, &mut NoStats)),
+        }
+    }
+
+    fn closest_points_all(
+        &self,
+        points: &[(Vec3, f32)],
+        out: &mut [Option<PointHit>],
+        counters: Option<&mut Counters>,
+    ) {
+        let pairs = out.iter_mut().zip(points);
+        match counters {
+            Some(c) => pairs.for_each(|(o, &(p, max))| *o = self.closest_point_with(p, max, c)),
+            None => pairs.for_each(|(o, &(p, max))| *o = self.closest_point(p, max)),
+        }
+    }
+}

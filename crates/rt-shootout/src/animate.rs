@@ -176,7 +176,7 @@ pub fn animate(args: &AnimateArgs, entries: &[Entry]) -> Result<AnimateReport, S
         .iter()
         .map(|name| structures::find(entries, name.trim()))
         .collect::<Result<_, _>>()?;
-    let (_, tris) = crate::compare::load_scene(&args.scene)?;
+    let (_, tris) = crate::scene::load_scene(&args.scene)?;
     if !tris.iter().any(|t| t.is_valid()) {
         return Err(format!(
             "--scene {}: no valid triangle to animate",

@@ -5,7 +5,6 @@
 //! pushes and pops, each primitive test and its outcome, mailbox skips), and the answer is
 //! checked against brute force. `cargo xtask explain` prints what [`explain`] returns.
 
-use crate::compare;
 use crate::structures::{self, Entry, Query};
 use rt_core::{Aabb, Accel, BruteForce, Hit, Primitive, Ray, Triangle};
 use rt_scene::raygen::parse_rays;
@@ -94,7 +93,7 @@ pub fn explain(args: &ExplainArgs, entries: &[Entry]) -> Result<String, String> 
         .iter()
         .map(|name| structures::find(entries, name))
         .collect::<Result<_, _>>()?;
-    let (_, triangles) = compare::load_scene(&args.scene)?;
+    let (_, triangles) = crate::scene::load_scene(&args.scene)?;
     let bounds = triangles
         .iter()
         .filter(|t| t.is_valid())

@@ -1,7 +1,8 @@
 //! Grading one row: the conformance kit's scenes passed or failed (with the first failing ray of
 //! each), and the shootout against reference structures, as JSON and Markdown for a teacher.
 
-use crate::compare::{self, Args, Report};
+use crate::compare::{self, Args};
+use crate::data::Report;
 use crate::structures::{self, Builder, Entry, Query};
 use rt_conformance::SCENES;
 use rt_core::DynAccel;

@@ -26,6 +26,7 @@
 pub mod animate;
 pub mod cli;
 pub mod compare;
+pub mod data;
 pub mod explain;
 pub mod fuzz;
 pub mod grade;
@@ -33,6 +34,7 @@ pub mod measure;
 pub mod memory;
 pub mod report;
 pub mod scale;
+pub mod scene;
 pub mod structures;
 
 pub use compare::{Args, Report, Row};

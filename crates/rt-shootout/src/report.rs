@@ -2,7 +2,8 @@
 //! cost per ray, memory, build time, and the SAH's prediction against the measured cost) and a
 //! heatmap strip of primitive tests per scene.
 
-use crate::compare::{Args, Report, Row};
+use crate::compare::Args;
+use crate::data::{Report, Row};
 use crate::structures::{self, Entry};
 use plotters::prelude::*;
 use rt_render::CostMap;

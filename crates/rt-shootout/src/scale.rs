@@ -139,7 +139,7 @@ impl Source {
             }
             return Ok(Self::Builtin(kind));
         }
-        let (_, triangles) = crate::compare::load_scene(spec)?;
+        let (_, triangles) = crate::scene::load_scene(spec)?;
         Ok(Self::File(triangles))
     }
 

@@ -1,0 +1,116 @@
+//! `compare`'s flags.
+
+use crate::structures;
+use rt_scene::scenes::BUILTIN_SCENES;
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+/// Which query `compare` measures.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum QueryKind {
+    /// Rays (`--rays` says which).
+    #[default]
+    Rays,
+    /// Closest-point queries: the primitive nearest to each of `--points` points.
+    ClosestPoint,
+}
+
+/// Which rays to trace.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayKind {
+    /// One ray per pixel from a pinhole camera framing the scene.
+    Primary,
+    /// Random origins inside the scene box, random directions.
+    Incoherent,
+    /// Occlusion rays from the primary hits to a point light (any-hit queries).
+    Shadow,
+}
+
+#[derive(clap::Args, Debug, Clone)]
+pub struct Args {
+    /// A built-in scene name (listed below) or the path of an .obj, .ply, .gltf or .glb file; repeat the flag to run
+    /// several scenes in turn.
+    #[arg(long = "scene", default_value = "sphereflake", value_name = "SCENE")]
+    pub scenes: Vec<String>,
+    /// The scene being measured (one of `scenes`, set by `run`).
+    #[arg(skip)]
+    pub scene: String,
+    /// Also write a report into DIR: `report.md` with SVG charts of every scene's figures and a
+    /// heatmap strip per scene (with `--grade`: `grade.md` and `grade.json`).
+    #[arg(short, long, value_name = "DIR")]
+    pub out: Option<PathBuf>,
+    /// Grade this row instead: run the conformance kit on it (every scene passed or failed, the
+    /// first failing ray of each), then the shootout against `--structures` (default bvh,
+    /// kdtree, grid), and write `grade.json` and `grade.md` into `--out DIR` (default `grade`).
+    #[arg(long, value_name = "ROW")]
+    pub grade: Option<String>,
+    /// Which query to measure: rays, or closest points (nearest primitive to a point).
+    #[arg(long, value_enum, default_value_t = QueryKind::Rays)]
+    pub query: QueryKind,
+    /// Closest-point queries: how many points (half uniform in the scene box grown by a quarter
+    /// on every side, half within 2% of its diagonal from the surface).
+    #[arg(long, default_value = "100k", value_parser = crate::cli::count)]
+    pub points: usize,
+    /// Closest-point queries: the largest distance searched [default: no limit].
+    #[arg(long, value_name = "D")]
+    pub max_distance: Option<f32>,
+    /// Trace a field of N instances of the scene instead (on a square grid, each rotated,
+    /// scaled unevenly, every seventh mirrored): a two-level scene. Each row's structure is
+    /// built once over the mesh and instanced under rt-bvh's `Instances`; brute force visits
+    /// every instance. Rays only.
+    #[arg(long, value_name = "N", value_parser = crate::cli::count)]
+    pub instances: Option<usize>,
+    /// Which rays to trace [default: primary].
+    #[arg(long, value_enum)]
+    pub rays: Option<RayKind>,
+    /// Image width for primary and shadow rays (incoherent: width × height rays).
+    #[arg(long, default_value_t = 1024)]
+    pub width: u32,
+    /// Image height for primary and shadow rays.
+    #[arg(long, default_value_t = 768)]
+    pub height: u32,
+    /// Comma-separated rows to run (listed below); brute force is always the baseline.
+    /// [default: every row]
+    #[arg(short, long, value_delimiter = ',')]
+    pub structures: Vec<String>,
+    /// Threads for building and tracing [default: all cores]; structures that build in parallel
+    /// use them.
+    #[arg(short = 'j', long)]
+    pub threads: Option<usize>,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    pub json: bool,
+    /// Replay rays from a file, one per line: `ox oy oz dx dy dz [tmin tmax]` (`#` comments).
+    /// Closest-hit queries, or any-hit with `--rays shadow`. The JSON then carries every answer.
+    #[arg(long)]
+    pub rays_file: Option<PathBuf>,
+    /// How many rays brute force checks (a random subset; all rays if there are fewer).
+    /// [default: 20,000; 1,000 with --instances, where one brute-force ray tests every
+    /// triangle of each instance whose box it enters]
+    #[arg(long, value_parser = crate::cli::count)]
+    pub check_rays: Option<usize>,
+    /// Seed for incoherent rays and for the checked subset.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// Timed builds and trace passes per structure, the fastest reported (brute force: its one
+    /// counted pass).
+    #[arg(long, default_value_t = 3)]
+    pub repeats: u32,
+}
+
+/// The text after `--help`: built-in scenes and structure rows.
+pub fn after_help(entries: &[structures::Entry]) -> String {
+    let mut s = String::from(
+        "Built-in scenes (add a size for about that many triangles: `random-soup:10M`, \
+         `terrain:500k`):\n",
+    );
+    for b in BUILTIN_SCENES {
+        let _ = writeln!(s, "  {:<14} {}", b.name, b.description);
+    }
+    s.push_str("\nStructure rows:\n");
+    for e in entries {
+        let _ = writeln!(s, "  {}", e.name);
+    }
+    s.push_str("\nExit status: 0 when every answer agrees, 1 on any mismatch, 2 on bad input.");
+    s
+}

@@ -1,0 +1,271 @@
+//! A report as a table, as JSON, and its disagreements as replayable rays.
+
+use super::Args;
+use super::points;
+use crate::data::{Report, Row};
+use rt_core::Hit;
+use std::fmt::Write as _;
+
+pub(super) fn to_table(r: &Report) -> String {
+    let mut s = String::new();
+    let (unit, units) = if r.ray_kind == points::KIND {
+        ("query", "closest-point queries")
+    } else {
+        ("ray", "rays")
+    };
+    if r.ray_kind == points::KIND {
+        let _ = writeln!(
+            s,
+            "scene {} ({} triangles, {} valid), {} {units}, {} threads; {} checked against brute force",
+            r.scene, r.triangles, r.valid_triangles, r.rays, r.threads, r.checked_rays
+        );
+    } else {
+        let hits = r
+            .hit_share()
+            .map_or(String::new(), |h| format!(" ({:.1}% hit)", 100.0 * h));
+        let _ = writeln!(
+            s,
+            "scene {} ({} triangles, {} valid), {} {} rays{hits}, {} threads; {} rays checked against brute force",
+            r.scene, r.triangles, r.valid_triangles, r.rays, r.ray_kind, r.threads, r.checked_rays
+        );
+    }
+    let _ = writeln!(
+        s,
+        "\nCost and speed: build time, memory kept, and per {unit} the nodes or cells entered and the \
+         primitives tested; speedup over brute force"
+    );
+    // The name column fits the longest row name.
+    let w = r
+        .rows
+        .iter()
+        .map(|row| row.name.len())
+        .max()
+        .unwrap_or(0)
+        .max("structure".len());
+    let _ = writeln!(
+        s,
+        "{:<w$} {:>9} {:>11} {:>12} {:>12} {:>11} {:>9} {:>10}",
+        "structure",
+        "build ms",
+        "memory MiB",
+        format!("visits/{unit}"),
+        format!("tests/{unit}"),
+        if unit == "ray" {
+            "Mrays/s"
+        } else {
+            "Mqueries/s"
+        },
+        "speedup",
+        "mismatches"
+    );
+    for row in &r.rows {
+        let _ = writeln!(
+            s,
+            "{:<w$} {:>9.1} {:>11.2} {:>12.1} {:>12} {:>11} {:>8.0}x {:>10}",
+            row.name,
+            row.build_ms,
+            row.memory_bytes as f64 / (1024.0 * 1024.0),
+            row.avg_visits,
+            // Three digits, since structures a user compares may differ by a few percent.
+            three_digits(row.avg_prim_tests),
+            three_digits(row.mrays_per_s),
+            row.speedup,
+            row.mismatches
+        );
+    }
+    // The shape of each structure: what the build produced, independent of the rays.
+    let _ = writeln!(
+        s,
+        "\nShape: nodes, depth, leaves and the share empty, primitives per non-empty leaf, \
+         references per primitive, and the tests a mailbox skipped per {unit}"
+    );
+    let _ = writeln!(
+        s,
+        "{:<w$} {:>9} {:>5} {:>9} {:>7} {:>10} {:>9} {:>11}  other figures",
+        "structure",
+        "nodes",
+        "depth",
+        "leaves",
+        "empty",
+        "prims/leaf",
+        "refs/prim",
+        format!("skips/{unit}"),
+    );
+    for row in r.rows.iter().filter(|row| row.leaves > 0) {
+        let _ = writeln!(
+            s,
+            "{:<w$} {:>9} {:>5} {:>9} {:>6.1}% {:>10.2} {:>9.2} {:>11}  {}",
+            row.name,
+            row.nodes,
+            row.max_depth,
+            row.leaves,
+            100.0 * row.empty_leaves as f64 / row.leaves as f64,
+            row.avg_leaf_prims,
+            row.duplication,
+            // Mailbox skips: tests a mailbox saved, so `tests/ray` plus this is what the
+            // structure would test without one.
+            three_digits(row.avg_mailbox_skips),
+            row.extra
+                .iter()
+                .map(|(k, v)| format!("{k} {}", three_digits(*v)))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
+    // What the SAH predicts for lines spread uniformly over the scene box, beside what these
+    // rays did: how far the builders' cost model holds.
+    let modelled: Vec<&Row> = r
+        .rows
+        .iter()
+        .filter(|row| row.predicted.is_some())
+        .collect();
+    if !modelled.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nThe SAH's prediction against these {units}: expected visits and tests per ray for \
+             lines spread uniformly over the scene box (scaled by the share that enter it), beside \
+             what the {units} did; ratio = measured / predicted"
+        );
+        let _ = writeln!(
+            s,
+            "{:<w$} {:>14} {:>14} {:>7} {:>14} {:>14} {:>7}",
+            "structure",
+            "visits (SAH)",
+            "visits (rays)",
+            "ratio",
+            "tests (SAH)",
+            "tests (rays)",
+            "ratio"
+        );
+        for row in modelled {
+            let p = row.predicted.expect("filtered");
+            let ratio = |m: f64, p: f64| if p > 0.0 { m / p } else { f64::NAN };
+            let _ = writeln!(
+                s,
+                "{:<w$} {:>14} {:>14} {:>7.2} {:>14} {:>14} {:>7.2}",
+                row.name,
+                three_digits(p.visits),
+                three_digits(row.avg_visits),
+                ratio(row.avg_visits, p.visits),
+                three_digits(p.tests),
+                three_digits(row.avg_prim_tests),
+                ratio(row.avg_prim_tests, p.tests)
+            );
+        }
+    }
+    if r.rows.len() > 1 && r.total_mismatches() == 0 {
+        let _ = writeln!(s, "all answers agree");
+    }
+    s
+}
+
+/// Three significant digits, so that brute force's 0.000823 and a BVH's 25.5 both read well.
+fn three_digits(x: f64) -> String {
+    if x >= 100.0 || x == 0.0 {
+        format!("{x:.0}")
+    } else {
+        let decimals = (2 - x.log10().floor() as i32).clamp(0, 8) as usize;
+        format!("{x:.decimals$}")
+    }
+}
+
+fn hit_json(h: Option<Hit>, query_any: bool) -> serde_json::Value {
+    match h {
+        None if query_any => serde_json::Value::Bool(false),
+        Some(_) if query_any => serde_json::Value::Bool(true),
+        None => serde_json::Value::Null,
+        Some(h) => serde_json::json!({ "prim": h.prim, "t": h.t, "u": h.u, "v": h.v }),
+    }
+}
+
+pub(super) fn to_json(r: &Report) -> String {
+    let any = r
+        .rows
+        .iter()
+        .flat_map(|row| row.answers.iter())
+        .flatten()
+        .any(|h| h.prim == u32::MAX);
+    let results: Vec<serde_json::Value> = r
+        .rows
+        .iter()
+        .map(|row| {
+            let mut v = serde_json::json!({
+                "structure": row.name,
+                "build_ms": row.build_ms,
+                "memory_bytes": row.memory_bytes,
+                "nodes": row.nodes,
+                "max_depth": row.max_depth,
+                "hits": row.hits,
+                "mismatches": row.mismatches,
+                "avg_visits": row.avg_visits,
+                "avg_prim_tests": row.avg_prim_tests,
+                "avg_mailbox_skips": row.avg_mailbox_skips,
+                "extra": row.extra.iter().map(|(k, v)| ((*k).to_string(), serde_json::json!(v))).collect::<serde_json::Map<_, _>>(),
+                "mrays_per_s": row.mrays_per_s,
+                "speedup": row.speedup,
+                "leaves": row.leaves,
+                "empty_leaves": row.empty_leaves,
+                "avg_leaf_prims": row.avg_leaf_prims,
+                "prim_refs": row.prim_refs,
+                "duplication": row.duplication,
+                "rays_traced": row.rays_traced,
+                "predicted_visits": row.predicted.map(|p| p.visits),
+                "predicted_tests": row.predicted.map(|p| p.tests),
+            });
+            if r.per_ray_answers {
+                v["ray_hits"] = row.answers.iter().map(|&h| hit_json(h, any)).collect();
+            }
+            v
+        })
+        .collect();
+    serde_json::json!({
+        "scene": r.scene,
+        "triangles": r.triangles,
+        "valid_triangles": r.valid_triangles,
+        "query": if r.ray_kind == points::KIND { "closest-point" } else { "rays" },
+        "ray_kind": r.ray_kind,
+        "rays": r.rays,
+        "hit_share": r.hit_share(),
+        "threads": r.threads,
+        "checked_rays": r.checked_rays,
+        "results": results,
+    })
+    .to_string()
+}
+
+pub(super) fn describe_disagreements(r: &Report, args: &Args) -> String {
+    let mut s = if r.point_disagreements.is_empty() {
+        format!(
+            "error: {} mismatches. First disagreeing rays (save the rays-file lines to a file and replay with \
+             `cargo xtask compare --scene {} --rays-file FILE`, or paste the Rust into a test):\n",
+            r.total_mismatches(),
+            args.scene
+        )
+    } else {
+        format!(
+            "error: {} mismatches. First disagreeing closest-point queries (paste the Rust into a \
+             test on the scene {}):\n",
+            r.total_mismatches(),
+            args.scene
+        )
+    };
+    for d in &r.point_disagreements {
+        let _ = writeln!(s, "  {} on query {}:", d.structure, d.index);
+        let p = d.point;
+        let _ = writeln!(
+            s,
+            "    rust:      closest_point(Vec3::new({:?}, {:?}, {:?}), {:?})",
+            p.x, p.y, p.z, d.max_distance
+        );
+        let _ = writeln!(s, "    brute-force: {:?}", d.expected);
+        let _ = writeln!(s, "    {}: {:?}", d.structure, d.got);
+    }
+    for d in &r.disagreements {
+        let _ = writeln!(s, "  {} on ray {}:", d.structure, d.ray_index);
+        let _ = writeln!(s, "    rays-file: {}", d.ray.to_line());
+        let _ = writeln!(s, "    rust:      {}", d.ray.to_rust());
+        let _ = writeln!(s, "    brute-force: {:?}", d.expected);
+        let _ = writeln!(s, "    {}: {:?}", d.structure, d.got);
+    }
+    s
+}

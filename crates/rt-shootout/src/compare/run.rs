@@ -1,0 +1,785 @@
+//! Running the shootout: the scene, the rays, each row built and traced (counted and timed),
+//! and every answer cross-checked.
+
+use super::output::{describe_disagreements, to_json, to_table};
+use super::{Args, QueryKind, RayKind, points};
+use crate::data::{Disagreement, Report, Row, predicted_per_ray};
+use crate::scene::load_scene;
+use crate::structures::{self, Query};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+use rt_bvh::Bvh;
+use rt_core::DynAccel;
+use rt_core::{Aabb, Hit, Primitive, Ray, Rng, Triangle};
+use rt_scene::raygen;
+use rt_scene::scenes;
+use std::io::IsTerminal;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+/// Runs the comparison of the rows among `entries` that `args` selects (all by default) on each
+/// scene, and prints the report (table or JSON) to stdout; disagreements go to stderr.
+///
+/// # Errors
+/// One line describing bad input: unknown scene or structure, unreadable or malformed file,
+/// a scene without valid triangles.
+pub fn run(args: &Args, entries: &[structures::Entry]) -> Result<Vec<Report>, String> {
+    let threads = args
+        .threads
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    if threads == 0 {
+        return Err("--threads must be at least 1".into());
+    }
+    if let Some(dir) = &args.out {
+        if args.query == QueryKind::ClosestPoint {
+            return Err(
+                "--out writes a report of ray queries only; leave it out with --query closest-point".into(),
+            );
+        }
+        crate::report::prepare(dir)?;
+    }
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .map_err(|e| format!("cannot start {threads} threads: {e}"))?;
+    // Every scene is loaded before any is measured, so a bad one fails at once.
+    for scene in &args.scenes {
+        load_scene(scene)?;
+    }
+    let mut reports = Vec::new();
+    for scene in &args.scenes {
+        let args = Args {
+            scene: scene.clone(),
+            ..args.clone()
+        };
+        let entries = select_entries(entries, &args.structures)?;
+        let report = match args.query {
+            QueryKind::Rays => pool.install(|| measure(&args, threads, entries))?,
+            QueryKind::ClosestPoint => pool.install(|| points::measure(&args, threads, entries))?,
+        };
+        if args.json {
+            println!("{}", to_json(&report));
+        } else {
+            if !reports.is_empty() {
+                println!();
+            }
+            print!("{}", to_table(&report));
+        }
+        if !report.disagreements.is_empty() || !report.point_disagreements.is_empty() {
+            eprint!("{}", describe_disagreements(&report, &args));
+        }
+        reports.push(report);
+    }
+    if let Some(dir) = &args.out {
+        let written = pool.install(|| crate::report::write(dir, &reports, args, entries))?;
+        if !args.json {
+            println!("\nwrote {}", written.display());
+        }
+    }
+    Ok(reports)
+}
+
+fn select_entries(
+    entries: &[structures::Entry],
+    names: &[String],
+) -> Result<Vec<structures::Entry>, String> {
+    let all = entries.to_vec();
+    if names.is_empty() || names.iter().any(|n| n == "all") {
+        return Ok(all);
+    }
+    let known: Vec<String> = all.iter().map(|e| e.name.clone()).collect();
+    let mut all: Vec<Option<structures::Entry>> = all.into_iter().map(Some).collect();
+    let mut out = Vec::new();
+    for name in names {
+        if name == "brute-force" {
+            continue;
+        }
+        let Some(i) = known.iter().position(|k| k == name) else {
+            return Err(format!(
+                "unknown structure `{name}` (known: {}, all)",
+                known.join(", ")
+            ));
+        };
+        if let Some(e) = all[i].take() {
+            out.push(e);
+        }
+    }
+    Ok(out)
+}
+
+struct Progress(ProgressBar);
+
+impl Progress {
+    fn new(steps: u64, visible: bool) -> Self {
+        let bar = ProgressBar::with_draw_target(
+            Some(steps),
+            if visible {
+                ProgressDrawTarget::stderr()
+            } else {
+                ProgressDrawTarget::hidden()
+            },
+        );
+        if let Ok(style) = ProgressStyle::with_template("{bar:30} {pos}/{len} {msg} ({elapsed})") {
+            bar.set_style(style);
+        }
+        if visible {
+            // Brute force can take seconds in one step; keep the elapsed time moving.
+            bar.enable_steady_tick(Duration::from_millis(250));
+        }
+        Self(bar)
+    }
+    fn step(&self, msg: String) {
+        self.0.set_message(msg);
+        self.0.tick();
+    }
+    fn done(&self) {
+        self.0.inc(1);
+    }
+}
+
+fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Result<Report, String> {
+    let source = Source::load(args)?;
+    let scene = source.label.clone();
+    if source.valid == 0 {
+        return Err(format!(
+            "{scene}: no valid triangles (all {} are degenerate or non-finite)",
+            source.mesh.len()
+        ));
+    }
+    let bounds = source.bounds;
+    if args.width == 0 || args.height == 0 {
+        return Err("--width and --height must be at least 1".into());
+    }
+
+    let (rays, ray_kind, query) = make_rays(args, &source)?;
+    if rays.is_empty() {
+        return Err(format!("no rays to trace ({ray_kind} rays on {scene})"));
+    }
+    let progress = Progress::new(
+        2 * entries.len() as u64 + 2, // build and trace per row, brute force, cross-check
+        std::io::stdout().is_terminal() && !args.json,
+    );
+
+    let check = args.check_rays.unwrap_or(if source.field.is_some() {
+        1_000
+    } else {
+        20_000
+    });
+    let subset = checked_subset(rays.len(), check, args.seed);
+    let subset_rays: Vec<Ray> = subset.iter().map(|&i| rays[i]).collect();
+
+    let mut rows = Vec::new();
+    let mut built: Vec<Arc<dyn DynAccel<Triangle>>> = Vec::new();
+    for entry in &entries {
+        progress.step(format!("building {}", entry.name));
+        let (s, build_ms) = build_fastest(|| source.build(entry), args.repeats)?;
+        progress.done();
+        progress.step(format!("tracing {}", entry.name));
+        let mut row = trace_row(
+            &entry.name,
+            s.as_ref(),
+            build_ms,
+            &rays,
+            query,
+            args.repeats,
+        );
+        row.predicted = predicted_per_ray(s.as_ref(), &rays, &bounds);
+        rows.push(row);
+        built.push(s);
+        progress.done();
+    }
+
+    progress.step(format!("brute force on {} rays", subset_rays.len()));
+    let brute_entry = structures::brute_force();
+    let t = Instant::now();
+    let brute = source.build(&brute_entry)?;
+    let build_ms = t.elapsed().as_secs_f64() * 1e3;
+    // One pass for brute force: its counters cost nothing next to N primitive tests per ray, so
+    // the counted pass is also the timed one.
+    let mut brute_row = trace_row(
+        &brute_entry.name,
+        brute.as_ref(),
+        build_ms,
+        &subset_rays,
+        query,
+        0,
+    );
+    progress.done();
+
+    progress.step("cross-checking".into());
+    let agree = |a: Option<Hit>, b: Option<Hit>| match query {
+        Query::Closest => Hit::agree(a, b),
+        Query::Any => a.is_some() == b.is_some(),
+    };
+    let mut disagreements = Vec::new();
+    let mut record = |rows: &mut [Row], ray_index: usize, expected: Option<Hit>| {
+        for row in rows.iter_mut() {
+            let got = row.answers[ray_index];
+            if !agree(expected, got) {
+                row.mismatches += 1;
+                if disagreements.len() < 8 {
+                    disagreements.push(Disagreement {
+                        structure: row.name.clone(),
+                        ray_index,
+                        ray: rays[ray_index],
+                        expected,
+                        got,
+                    });
+                }
+            }
+        }
+    };
+    let mut in_subset = vec![false; rays.len()];
+    for (k, &i) in subset.iter().enumerate() {
+        in_subset[i] = true;
+        record(&mut rows, i, brute_row.answers[k]);
+    }
+    // Outside the subset, brute force settles every ray on which the structures disagree.
+    let mut settled = 0;
+    for i in (0..rays.len()).filter(|&i| !in_subset[i]) {
+        let first = rows.first().map(|r| r.answers[i]);
+        if rows
+            .iter()
+            .any(|r| first.is_some_and(|f| !agree(f, r.answers[i])))
+        {
+            settled += 1;
+            record(&mut rows, i, structures::answer(&*brute, &rays[i], query));
+        }
+    }
+    progress.done();
+    progress.0.finish_and_clear();
+
+    let base = brute_row.mrays_per_s;
+    brute_row.speedup = 1.0;
+    for r in &mut rows {
+        r.speedup = r.mrays_per_s / base;
+    }
+    let mut all_rows = vec![brute_row];
+    all_rows.extend(rows);
+    Ok(Report {
+        scene,
+        triangles: source.triangles,
+        valid_triangles: source.valid,
+        ray_kind,
+        rays: rays.len(),
+        threads,
+        checked_rays: subset.len() + settled,
+        rows: all_rows,
+        disagreements,
+        point_disagreements: Vec::new(),
+        per_ray_answers: args.rays_file.is_some(),
+    })
+}
+
+/// Builds a row `repeats` times (at least once) with `build` and keeps the last structure with
+/// the fastest build's time in milliseconds. Builds are timed like traces, since a single build
+/// on a shared host can be 20% off (the structure is the same every time).
+pub(crate) fn build_fastest(
+    build: impl Fn() -> Result<Arc<dyn DynAccel<Triangle>>, String>,
+    repeats: u32,
+) -> Result<(Arc<dyn DynAccel<Triangle>>, f64), String> {
+    let mut build_ms = f64::INFINITY;
+    let mut s = None;
+    for _ in 0..repeats.max(1) {
+        drop(s.take());
+        let t = Instant::now();
+        let built = build()?;
+        build_ms = build_ms.min(t.elapsed().as_secs_f64() * 1e3);
+        s = Some(built);
+    }
+    Ok((s.expect("built at least once"), build_ms))
+}
+
+/// What the rows are built over: a scene's triangles, or a field of instances of them
+/// (`--instances`).
+pub(crate) struct Source {
+    /// The scene's name as the report shows it.
+    pub label: String,
+    /// The scene's triangles (the one mesh every instance shares, for a field).
+    pub mesh: std::sync::Arc<[Triangle]>,
+    /// The field's transforms, if it is one.
+    pub field: Option<Vec<rt_core::glam::Affine3A>>,
+    /// Triangles in the scene, every instance counted.
+    pub triangles: usize,
+    /// Valid triangles, every instance counted.
+    pub valid: usize,
+    /// The box around the valid triangles (in the world).
+    pub bounds: Aabb,
+}
+
+impl Source {
+    /// The scene `args.scene`, fielded if `args.instances` asks for it.
+    pub(crate) fn load(args: &Args) -> Result<Self, String> {
+        let (scene, tris) = load_scene(&args.scene)?;
+        let valid = tris.iter().filter(|t| t.is_valid()).count();
+        let bounds = tris
+            .iter()
+            .filter(|t| t.is_valid())
+            .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+        let mesh: std::sync::Arc<[Triangle]> = tris.into();
+        let Some(count) = args.instances else {
+            return Ok(Self {
+                label: scene,
+                triangles: mesh.len(),
+                mesh,
+                field: None,
+                valid,
+                bounds,
+            });
+        };
+        if !(1..=1_000_000).contains(&count) {
+            return Err(format!(
+                "--instances must be from 1 to 1000000, not {count}"
+            ));
+        }
+        let field = scenes::instance_field(&bounds, count, args.seed);
+        let mut world = Aabb::EMPTY;
+        for xf in &field {
+            let t = rt_core::InstanceTransform::new(*xf).map_err(|e| e.to_string())?;
+            world = world.union(t.world_bounds(&bounds).0);
+        }
+        Ok(Self {
+            label: format!("{scene} × {count}"),
+            triangles: mesh.len() * count,
+            valid: valid * count,
+            mesh,
+            field: Some(field),
+            bounds: world,
+        })
+    }
+
+    /// `entry`'s structure over the scene: built over the triangles, or built once over the mesh
+    /// and instanced under rt-bvh's `Instances` (brute force: the linear reference, which
+    /// visits every instance).
+    pub(crate) fn build(
+        &self,
+        entry: &structures::Entry,
+    ) -> Result<Arc<dyn DynAccel<Triangle>>, String> {
+        let Some(field) = &self.field else {
+            return Ok((entry.build)(&self.mesh));
+        };
+        Ok(if entry.name == "brute-force" {
+            Arc::new(
+                structures::Field::<rt_core::LinearInstances<Triangle>>::new(
+                    self.mesh.clone(),
+                    field,
+                    &entry.build,
+                )?,
+            )
+        } else {
+            Arc::new(structures::Field::<rt_bvh::Instances<Triangle>>::new(
+                self.mesh.clone(),
+                field,
+                &entry.build,
+            )?)
+        })
+    }
+
+    /// The world-space triangle a row's hit names (`instance · mesh length + primitive` in a
+    /// field).
+    fn world_triangle(&self, prim: u32) -> Triangle {
+        let n = self.mesh.len();
+        match &self.field {
+            None => self.mesh[prim as usize],
+            Some(field) => {
+                let (k, i) = (prim as usize / n, prim as usize % n);
+                let t = self.mesh[i];
+                let w = |v| field[k].transform_point3(v);
+                Triangle::new(w(t.v0), w(t.v1), w(t.v2))
+            }
+        }
+    }
+}
+
+/// The queries brute force checks: every one when there are at most `check`, else a
+/// reproducible random sample of `check`, in increasing order.
+pub(crate) fn checked_subset(len: usize, check: usize, seed: u64) -> Vec<usize> {
+    if len <= check {
+        return (0..len).collect();
+    }
+    let mut idx: Vec<usize> = (0..len).collect();
+    let mut rng = Rng::new(seed ^ 0x5eed_c4ec);
+    for i in 0..check {
+        let j = i + rng.below((len - i) as u32) as usize;
+        idx.swap(i, j);
+    }
+    idx.truncate(check);
+    idx.sort_unstable();
+    idx
+}
+
+fn make_rays(args: &Args, source: &Source) -> Result<(Vec<Ray>, &'static str, Query), String> {
+    let kind = args.rays.unwrap_or(RayKind::Primary);
+    let query = if kind == RayKind::Shadow {
+        Query::Any
+    } else {
+        Query::Closest
+    };
+    if let Some(path) = &args.rays_file {
+        let rays = raygen::read_rays_file(path).map_err(|e| e.to_string())?;
+        return Ok((rays, "file", query));
+    }
+    let bounds = &source.bounds;
+    let camera = if source.field.is_some() {
+        // A field lies flat on the ground: seen from above at 45°, it fills the picture.
+        rt_scene::Camera::framing_from(
+            bounds,
+            rt_core::glam::Vec3::new(0.3, 1.5, 1.0),
+            args.width,
+            args.height,
+        )
+    } else {
+        scenes::camera_for(&args.scene, bounds, args.width, args.height)
+    };
+    let shared_kind = match kind {
+        RayKind::Primary => raygen::RayKind::Primary,
+        RayKind::Incoherent => raygen::RayKind::Incoherent,
+        RayKind::Shadow => raygen::RayKind::Shadow,
+    };
+    // Shadow rays start at the primary hits, found by a SAH BVH (any correct structure finds
+    // the same ones); they need only the triangles hit, in the world.
+    let rays = match shared_kind {
+        raygen::RayKind::Shadow => {
+            let primary = camera.primary_rays(args.width, args.height);
+            let entry = structures::entries_of::<Bvh<Triangle>, Bvh<rt_core::Shape>>()
+                .into_iter()
+                .find(|e| e.name == "bvh-binary")
+                .expect("rt-bvh has a binary preset");
+            let s = source.build(&entry)?;
+            let mut hit_tris = Vec::new();
+            let hits: Vec<Option<Hit>> = primary
+                .iter()
+                .map(|r| {
+                    structures::answer(&*s, r, Query::Closest).map(|h| {
+                        hit_tris.push(source.world_triangle(h.prim));
+                        Hit {
+                            prim: hit_tris.len() as u32 - 1,
+                            ..h
+                        }
+                    })
+                })
+                .collect();
+            raygen::shadow_rays(&primary, &hits, &hit_tris, raygen::default_light(bounds))
+        }
+        raygen::RayKind::Primary => camera.primary_rays(args.width, args.height),
+        raygen::RayKind::Incoherent => raygen::incoherent_rays(
+            bounds,
+            args.width as usize * args.height as usize,
+            args.seed,
+        ),
+    };
+    Ok((rays, shared_kind.name(), query))
+}
+
+fn trace_row(
+    name: &str,
+    s: &dyn DynAccel<Triangle>,
+    build_ms: f64,
+    rays: &[Ray],
+    query: Query,
+    repeats: u32,
+) -> Row {
+    let t = Instant::now();
+    let (answers, counters) = structures::trace_counted(s, rays, query);
+    let mut best = t.elapsed();
+    let mut hits = answers.iter().filter(|a| a.is_some()).count();
+    if repeats > 0 {
+        best = Duration::MAX;
+    }
+    for _ in 0..repeats {
+        let t = Instant::now();
+        hits = structures::trace_timed(s, rays, query);
+        best = best.min(t.elapsed());
+    }
+    let mut row = Row::measured(name, s, build_ms, rays.len(), hits, counters, best);
+    row.answers = answers;
+    row
+}
+
+impl Row {
+    /// A row's figures from its counted pass (`counters`, `hits` answers found) and its best
+    /// time over `queries` queries; the answers are left for the caller.
+    pub(crate) fn measured(
+        name: &str,
+        s: &dyn DynAccel<Triangle>,
+        build_ms: f64,
+        queries: usize,
+        hits: usize,
+        counters: rt_core::Counters,
+        best: Duration,
+    ) -> Self {
+        let stats = s.build_stats_dyn();
+        let n = queries.max(1) as f64;
+        Row {
+            name: name.to_string(),
+            build_ms,
+            memory_bytes: s.memory_bytes_dyn(),
+            nodes: stats.nodes,
+            leaves: stats.leaves,
+            empty_leaves: stats.empty_leaves,
+            max_depth: stats.max_depth,
+            avg_leaf_prims: stats.avg_prims_per_leaf(),
+            prim_refs: stats.prim_refs,
+            duplication: stats.duplication(),
+            rays_traced: queries,
+            hits,
+            mismatches: 0,
+            avg_visits: counters.node_visits as f64 / n,
+            avg_prim_tests: counters.prim_tests as f64 / n,
+            avg_mailbox_skips: counters.mailbox_skips as f64 / n,
+            extra: stats.extra,
+            mrays_per_s: queries as f64 / best.as_secs_f64().max(1e-9) / 1e6,
+            speedup: 0.0,
+            predicted: None,
+            answers: Vec::new(),
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+    use rt_bvh::BvhParams;
+    use rt_core::{Accel, BuildStats, Stats};
+
+    /// A structure that is wrong on purpose: it loses every hit on an even primitive.
+    #[derive(Debug)]
+    struct LosesEvenHits<P: rt_core::Primitive>(Bvh<P>);
+
+    impl<P: rt_core::Primitive> Accel for LosesEvenHits<P> {
+        type Prim = P;
+        type Params = ();
+        const NAME: &'static str = "broken";
+        fn presets() -> Vec<(&'static str, ())> {
+            vec![("default", ())]
+        }
+        fn build(prims: &[P], _: &()) -> Self {
+            Self(Bvh::build(prims, &BvhParams::sah()))
+        }
+        fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+            self.0
+                .intersect_with(ray, stats)
+                .filter(|h| h.prim % 2 == 1)
+        }
+        fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+            self.intersect_with(ray, stats).is_some()
+        }
+        fn bounds(&self) -> Aabb {
+            self.0.bounds()
+        }
+        /// Loses even primitives here too.
+        fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+            self.0.ball_query(&mut OddOnly(query), stats);
+        }
+        fn memory_bytes(&self) -> usize {
+            self.0.memory_bytes()
+        }
+        fn build_stats(&self) -> BuildStats {
+            self.0.build_stats()
+        }
+    }
+
+    /// Passes on only the odd primitives offered to it.
+    struct OddOnly<'a, Q>(&'a mut Q);
+
+    impl<P, Q: rt_core::BallQuery<P>> rt_core::BallQuery<P> for OddOnly<'_, Q> {
+        fn center(&self) -> rt_core::glam::Vec3 {
+            self.0.center()
+        }
+        fn radius_sq(&self) -> f32 {
+            self.0.radius_sq()
+        }
+        fn test(&mut self, prim: &P, id: u32) {
+            if id % 2 == 1 {
+                self.0.test(prim, id);
+            }
+        }
+        fn test_triangle(
+            &mut self,
+            v0: rt_core::glam::Vec3,
+            e1: rt_core::glam::Vec3,
+            e2: rt_core::glam::Vec3,
+            id: u32,
+        ) {
+            if id % 2 == 1 {
+                self.0.test_triangle(v0, e1, e2, id);
+            }
+        }
+    }
+
+    fn args(extra: &[&str]) -> Args {
+        #[derive(clap::Parser)]
+        struct Wrap {
+            #[command(flatten)]
+            args: Args,
+        }
+        let mut v = vec!["compare"];
+        v.extend_from_slice(extra);
+        let mut args = Wrap::parse_from(v).args;
+        args.scene = args.scenes[0].clone();
+        args
+    }
+
+    #[test]
+    fn a_field_of_instances_agrees_on_every_row_and_every_ray_kind() {
+        // Forty teapots of about 1,000 triangles, every row's structure under the instances.
+        for kind in ["primary", "incoherent", "shadow"] {
+            let a = args(&[
+                "--scene",
+                "teapot:1000",
+                "--instances",
+                "40",
+                "--rays",
+                kind,
+                "--width",
+                "96",
+                "--height",
+                "64",
+                "--repeats",
+                "1",
+                "--check-rays",
+                "6144",
+            ]);
+            let report = measure(&a, 1, structures::all()).expect("the field runs");
+            let one = load_scene("teapot:1000").unwrap().1.len();
+            assert_eq!(
+                report.triangles,
+                40 * one,
+                "every instance's triangles counted"
+            );
+            assert_eq!(
+                report.checked_rays, report.rays,
+                "every ray checked by brute force"
+            );
+            assert!(report.rows.len() > 5);
+            let hits = report.rows[1].hits;
+            if kind == "primary" {
+                assert!(
+                    hits > report.rays / 20,
+                    "the field fills the view ({hits} hits)"
+                );
+            }
+            assert!(hits > 0, "{kind}: some rays hit");
+            for row in &report.rows {
+                assert_eq!(row.mismatches, 0, "{kind}: {} disagrees", row.name);
+                assert_eq!(row.hits, hits, "{kind}: {}", row.name);
+            }
+        }
+    }
+
+    #[test]
+    fn a_field_rejects_bad_counts_and_closest_points_in_one_line() {
+        let bad = measure(
+            &args(&["--scene", "teapot:1000", "--instances", "0"]),
+            1,
+            structures::all(),
+        );
+        assert_eq!(
+            bad.unwrap_err(),
+            "--instances must be from 1 to 1000000, not 0"
+        );
+        let points = args(&[
+            "--scene",
+            "teapot:1000",
+            "--instances",
+            "4",
+            "--query",
+            "closest-point",
+        ]);
+        let err = points::measure(&points, 1, structures::all()).unwrap_err();
+        assert!(err.starts_with("--query closest-point runs on one mesh") && !err.contains('\n'));
+    }
+
+    #[test]
+    fn a_wrong_structure_is_caught_on_and_off_the_checked_subset() {
+        // 2,000 rays checked by brute force out of 3,072: disagreements outside the subset must
+        // be found by the cross-check against the other structures.
+        let a = args(&[
+            "--scene",
+            "random-soup",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--check-rays",
+            "2000",
+            "--repeats",
+            "1",
+        ]);
+        let mut entries = structures::all();
+        entries.push(structures::entry_of::<
+            LosesEvenHits<Triangle>,
+            LosesEvenHits<rt_core::Shape>,
+        >());
+        let report = measure(&a, 1, entries).unwrap();
+        let broken = report.rows.iter().find(|r| r.name == "broken").unwrap();
+        let bvh = report.rows.iter().find(|r| r.name == "bvh").unwrap();
+        assert_eq!(bvh.mismatches, 0);
+        // The broken row loses exactly the rays whose true answer is an even primitive.
+        let expected = bvh
+            .answers
+            .iter()
+            .filter(|a| a.is_some_and(|h| h.prim % 2 == 0))
+            .count();
+        assert!(
+            expected > 100,
+            "the test scene must exercise the broken path"
+        );
+        assert_eq!(broken.mismatches, expected);
+        assert!(
+            report.checked_rays > 2000,
+            "rays outside the subset were settled by brute force"
+        );
+        assert!(!report.disagreements.is_empty());
+    }
+
+    #[test]
+    fn a_wrong_closest_point_query_is_caught_on_and_off_the_checked_subset() {
+        // 1,000 of 3,000 points checked by brute force; the rest by the cross-check.
+        let a = args(&[
+            "--scene",
+            "random-soup",
+            "--query",
+            "closest-point",
+            "--points",
+            "3000",
+            "--check-rays",
+            "1000",
+            "--repeats",
+            "1",
+        ]);
+        let mut entries = structures::all();
+        entries.retain(|e| ["bvh", "kdtree", "grid", "hgrid", "octree"].contains(&e.name.as_str()));
+        entries.push(structures::entry_of::<
+            LosesEvenHits<Triangle>,
+            LosesEvenHits<rt_core::Shape>,
+        >());
+        let report = points::measure(&a, 1, entries).unwrap();
+        assert_eq!(report.ray_kind, points::KIND);
+        for row in &report.rows {
+            let expect_wrong = row.name == "broken";
+            assert_eq!(
+                row.mismatches > 0,
+                expect_wrong,
+                "{}: {}",
+                row.name,
+                row.mismatches
+            );
+        }
+        let broken = report.rows.iter().find(|r| r.name == "broken").unwrap();
+        // About half the answers are even primitives, and every one of them is caught.
+        assert!(broken.mismatches > 1000, "{}", broken.mismatches);
+        assert!(
+            report.checked_rays > 1000,
+            "points outside the subset were settled"
+        );
+        let d = &report.point_disagreements[0];
+        assert_eq!(d.structure, "broken");
+        assert!(d.expected.is_some_and(|h| h.prim % 2 == 0), "{d:?}");
+        let table = to_table(&report);
+        assert!(
+            table.contains("Mqueries/s") && table.contains("3000 closest-point queries"),
+            "{table}"
+        );
+    }
+}

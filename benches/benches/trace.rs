@@ -5,7 +5,6 @@
 use criterion::{BenchmarkId, Criterion, Throughput, criterion_group, criterion_main};
 use rt_benches::{BenchScene, scenes};
 use rt_bvh::{Bvh, BvhParams};
-use rt_core::glam::Vec3A;
 use rt_core::{Accel, MtTriangle, Ray, Triangle};
 use rt_grid::{Grid, GridParams};
 use rt_hgrid::{HGrid, HGridParams};
@@ -17,12 +16,14 @@ use std::time::Duration;
 const WIDTH: u32 = 512;
 const HEIGHT: u32 = 384;
 
+/// The triangles as obvhs's. obvhs resolves its own glam version (any from 0.33 up), so the
+/// vertices cross as arrays rather than as one shared `Vec3A` type.
 fn to_obvhs(tris: &[Triangle]) -> Vec<obvhs::triangle::Triangle> {
     tris.iter()
         .map(|t| obvhs::triangle::Triangle {
-            v0: Vec3A::from(t.v0),
-            v1: Vec3A::from(t.v1),
-            v2: Vec3A::from(t.v2),
+            v0: t.v0.to_array().into(),
+            v1: t.v1.to_array().into(),
+            v2: t.v2.to_array().into(),
         })
         .collect()
 }
@@ -211,7 +212,7 @@ fn bench_trace(c: &mut Criterion, scene: &BenchScene) {
     let otris = to_obvhs(&scene.triangles);
     let orays: Vec<obvhs::ray::Ray> = rays
         .iter()
-        .map(|r| obvhs::ray::Ray::new_inf(Vec3A::from(r.origin), Vec3A::from(r.dir())))
+        .map(|r| obvhs::ray::Ray::new_inf(r.origin.to_array().into(), r.dir().to_array().into()))
         .collect();
     for (label, params) in [
         ("medium", obvhs::BvhBuildParams::medium_build()),

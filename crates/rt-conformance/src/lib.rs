@@ -31,7 +31,10 @@ use glam::Vec3;
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
 use rt_core::trace::{Event, Outcome, Trace};
-use rt_core::{Accel, BruteForce, Counters, Hit, PointHit, Primitive, Ray, Rng, Sphere, Triangle};
+use rt_core::{
+    Accel, BruteForce, ClosestPointQuery, Counters, DynAccel, Hit, PointHit, Primitive, Ray, Rng,
+    Sphere, Triangle,
+};
 use std::fmt;
 
 /// Re-exported for [`conformance_tests!`], so the macro's expansion names rt-core's items
@@ -694,6 +697,70 @@ pub fn check_scene<A: Accel<Prim = Triangle> + 'static>(params: &A::Params, name
     if let Err(e) = check_case::<A>(params, &s.triangles, &s.rays) {
         panic!("conformance scene `{name}` failed: {e}");
     }
+    // The single queries agree with brute force; the slice queries must agree with them.
+    let accel = A::build(&s.triangles, params);
+    let points = scene_points(&s.triangles, &s.rays);
+    if let Err(e) = compare_slices(&accel, &s.rays, &points) {
+        panic!("conformance scene `{name}` failed: {e}");
+    }
+}
+
+/// Checks that a structure's slice queries ([`DynAccel::intersect_all`],
+/// [`occluded_all`](DynAccel::occluded_all) and
+/// [`closest_points_all`](DynAccel::closest_points_all)) give, slot for slot, exactly its
+/// single queries' answers, and count exactly the events the single queries count. The shootout
+/// and batch callers use the slice queries, so a structure (or a wrapper) that implements them
+/// itself must not answer differently there.
+///
+/// # Errors
+/// The first slot or count that differs, with its ray or point.
+pub fn compare_slices<P: Primitive>(
+    accel: &dyn DynAccel<P>,
+    rays: &[Ray],
+    points: &[(Vec3, f32)],
+) -> Result<(), String> {
+    let name = accel.name();
+    let (mut single, mut slices) = (Counters::default(), Counters::default());
+    let mut hits = vec![None; rays.len()];
+    accel.intersect_all(rays, &mut hits, Some(&mut slices));
+    for (i, (r, got)) in rays.iter().zip(&hits).enumerate() {
+        let expected = accel.intersect_dyn(r, Some(&mut single));
+        if *got != expected {
+            return Err(format!(
+                "{name}: intersect_all slot {i} is {got:?}, intersect gives {expected:?}, for ray {}",
+                r.to_rust()
+            ));
+        }
+    }
+    let mut blocked = vec![false; rays.len()];
+    accel.occluded_all(rays, &mut blocked, Some(&mut slices));
+    for (i, (r, &got)) in rays.iter().zip(&blocked).enumerate() {
+        let expected = accel.occluded_dyn(r, Some(&mut single));
+        if got != expected {
+            return Err(format!(
+                "{name}: occluded_all slot {i} is {got}, occluded gives {expected}, for ray {}",
+                r.to_rust()
+            ));
+        }
+    }
+    let mut near = vec![None; points.len()];
+    accel.closest_points_all(points, &mut near, Some(&mut slices));
+    for (i, (&(p, max), got)) in points.iter().zip(&near).enumerate() {
+        let mut q = ClosestPointQuery::new(p, max, &accel.bounds_dyn());
+        accel.ball_query_dyn(&mut q, Some(&mut single));
+        let expected = q.best();
+        if *got != expected {
+            return Err(format!(
+                "{name}: closest_points_all slot {i} is {got:?}, closest_point gives {expected:?}, for the point {p:?} within {max}"
+            ));
+        }
+    }
+    if single != slices {
+        return Err(format!(
+            "{name}: the slice queries counted {slices:?}, the single queries {single:?}"
+        ));
+    }
+    Ok(())
 }
 
 /// Checks only the closest-hit queries of structure `A` with `params` on the named scene, under

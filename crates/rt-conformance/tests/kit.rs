@@ -313,3 +313,95 @@ fn a_refit_that_ignores_the_motion_fails_the_refit_kit() {
         .expect_err("answers for the old places must be caught");
     assert!(e.starts_with("after refitting to a wave:"), "{e}");
 }
+
+/// A structure seen through `DynAccel` whose slice queries are wrong on purpose: the last ray of
+/// a slice gets no answer (`LOSES`), or the slices count nothing (`!LOSES`). Every single query
+/// is brute force's.
+struct SlicedWrong<const LOSES: bool>(BruteForce<Triangle>);
+
+impl<const LOSES: bool> rt_core::DynAccel<Triangle> for SlicedWrong<LOSES> {
+    fn name(&self) -> &'static str {
+        "sliced-wrong"
+    }
+    fn bounds_dyn(&self) -> Aabb {
+        self.0.bounds()
+    }
+    fn memory_bytes_dyn(&self) -> usize {
+        self.0.memory_bytes()
+    }
+    fn build_stats_dyn(&self) -> BuildStats {
+        self.0.build_stats()
+    }
+    fn regions_dyn(&self) -> Vec<rt_core::Region> {
+        Vec::new()
+    }
+    fn intersect_dyn(&self, ray: &Ray, counters: Option<&mut rt_core::Counters>) -> Option<Hit> {
+        rt_core::DynAccel::intersect_dyn(&self.0, ray, counters)
+    }
+    fn occluded_dyn(&self, ray: &Ray, counters: Option<&mut rt_core::Counters>) -> bool {
+        rt_core::DynAccel::occluded_dyn(&self.0, ray, counters)
+    }
+    fn ball_query_dyn(
+        &self,
+        query: &mut dyn BallQuery<Triangle>,
+        counters: Option<&mut rt_core::Counters>,
+    ) {
+        rt_core::DynAccel::ball_query_dyn(&self.0, query, counters);
+    }
+    fn trace_dyn(&self, ray: &Ray, any: bool) -> (Option<Hit>, rt_core::Trace) {
+        rt_core::DynAccel::trace_dyn(&self.0, ray, any)
+    }
+    fn intersect_all(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        counters: Option<&mut rt_core::Counters>,
+    ) {
+        let counters = if LOSES { counters } else { None };
+        rt_core::DynAccel::intersect_all(&self.0, rays, out, counters);
+        if let (true, Some(last)) = (LOSES, out.last_mut()) {
+            *last = None;
+        }
+    }
+    fn occluded_all(
+        &self,
+        rays: &[Ray],
+        out: &mut [bool],
+        counters: Option<&mut rt_core::Counters>,
+    ) {
+        let counters = if LOSES { counters } else { None };
+        rt_core::DynAccel::occluded_all(&self.0, rays, out, counters);
+    }
+    fn closest_points_all(
+        &self,
+        points: &[(Vec3, f32)],
+        out: &mut [Option<rt_core::PointHit>],
+        counters: Option<&mut rt_core::Counters>,
+    ) {
+        let counters = if LOSES { counters } else { None };
+        rt_core::DynAccel::closest_points_all(&self.0, points, out, counters);
+    }
+}
+
+/// The slice check passes brute force and fails a structure whose slice answers or slice counts
+/// differ from its single queries'.
+#[test]
+fn slice_queries_that_differ_from_single_ones_fail() {
+    let s = scene("shared_edge");
+    // The last ray must hit, so that losing its answer shows.
+    let mut rays = s.rays.clone();
+    let brute = BruteForce::build(&s.triangles, &());
+    let hitting = *rays.iter().find(|r| brute.intersect(r).is_some()).unwrap();
+    rays.push(hitting);
+    let points = rt_conformance::scene_points(&s.triangles, &rays);
+    rt_conformance::compare_slices(&brute, &rays, &points).unwrap();
+    let lost = rt_conformance::compare_slices(&SlicedWrong::<true>(brute.clone()), &rays, &points)
+        .expect_err("a lost answer must be caught");
+    assert!(lost.contains("intersect_all slot"), "{lost}");
+    let uncounted = rt_conformance::compare_slices(&SlicedWrong::<false>(brute), &rays, &points)
+        .expect_err("slices that count nothing must be caught");
+    assert!(
+        uncounted.contains("the slice queries counted"),
+        "{uncounted}"
+    );
+}

@@ -391,24 +391,12 @@ fn bench_traces(scene: &BenchScene, tracers: &[Tracer], o: &Options, out: &mut V
     }
 }
 
-fn cpu_model() -> String {
-    std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split(':').nth(1))
-                .map(|m| m.trim().to_string())
-        })
-        .unwrap_or_else(|| std::env::consts::ARCH.to_string())
-}
-
 fn report(names: &[String], traces: &[TraceResult], builds: &[BuildResult], o: &Options) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
         "\n{} ({} threads); {}×{} rays per set; traces single-threaded; medians of {} interleaved passes",
-        cpu_model(),
+        rt_shootout::measure::cpu_model(),
         threads_all(),
         o.width,
         o.height,
@@ -574,7 +562,7 @@ fn to_json(
         })
         .collect();
     serde_json::to_string_pretty(&serde_json::json!({
-        "cpu": cpu_model(), "threads": threads_all(), "width": o.width, "height": o.height,
+        "cpu": rt_shootout::measure::cpu_model(), "threads": threads_all(), "width": o.width, "height": o.height,
         "passes": o.passes, "contenders": names, "traces": traces, "builds": builds,
     }))
     .expect("JSON")

@@ -4,7 +4,6 @@
 //! files (one per row: `--out slice.svg` with two rows writes `slice-kdtree.svg` and
 //! `slice-bvh.svg`).
 
-use rt_core::{Aabb, Primitive};
 use rt_render::{Coloring, SliceOptions};
 use rt_shootout::{compare, structures};
 use std::path::{Path, PathBuf};
@@ -98,10 +97,7 @@ pub fn run(args: &Args) -> Result<(), String> {
         .map(|name| structures::find(&all, name))
         .collect::<Result<Vec<_>, _>>()?;
     let (_, triangles) = compare::load_scene(&args.scene)?;
-    let bounds = triangles
-        .iter()
-        .filter(|t| t.is_valid())
-        .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+    let bounds = rt_core::valid_bounds(triangles.iter());
     let options = SliceOptions {
         axis,
         at: args.at,

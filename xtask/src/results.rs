@@ -8,6 +8,7 @@
 //! its tables. Any mismatch or failure in any command fails the page: a page is written only
 //! from runs whose every answer was checked.
 
+use rt_shootout::data::three_digits;
 use serde_json::Value;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -274,15 +275,7 @@ fn stamp(args: &Args) -> Result<String, String> {
     let commit = git(&["rev-parse", "--short", "HEAD"]).unwrap_or_else(|| "unknown".into());
     let dirty =
         git(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
-    let cpu = std::fs::read_to_string("/proc/cpuinfo")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("model name"))
-                .and_then(|l| l.split_once(':'))
-                .map(|(_, v)| v.trim().to_owned())
-        })
-        .unwrap_or_else(|| format!("unknown ({})", std::env::consts::ARCH));
+    let cpu = rt_shootout::measure::cpu_model();
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let rustc = Command::new("rustc")
         .arg("--version")
@@ -339,23 +332,6 @@ fn f(v: &Value) -> f64 {
     v.as_f64().unwrap_or(f64::NAN)
 }
 
-/// Three significant digits.
-fn sig(x: f64) -> String {
-    if !x.is_finite() {
-        return "-".into();
-    }
-    let digits = if x.abs() >= 100.0 {
-        0
-    } else if x.abs() >= 10.0 {
-        1
-    } else if x.abs() >= 1.0 {
-        2
-    } else {
-        3
-    };
-    format!("{x:.digits$}")
-}
-
 /// A `compare --json` run as a table: per row build time, memory, visits and tests per query,
 /// speed and the speedup over brute force.
 fn shootout_table(page: &mut String, run: &Run) {
@@ -394,11 +370,11 @@ fn shootout_table(page: &mut String, run: &Run) {
             page,
             "| {} | {} | {:.2} | {} | {} | {} | {:.0} |",
             row["structure"].as_str().unwrap_or("?"),
-            sig(f(&row["build_ms"])),
+            three_digits(f(&row["build_ms"])),
             f(&row["memory_bytes"]) / (1024.0 * 1024.0),
-            sig(f(&row["avg_visits"])),
-            sig(f(&row["avg_prim_tests"])),
-            sig(f(&row["mrays_per_s"])),
+            three_digits(f(&row["avg_visits"])),
+            three_digits(f(&row["avg_prim_tests"])),
+            three_digits(f(&row["mrays_per_s"])),
             f(&row["speedup"]),
         );
     }
@@ -429,7 +405,7 @@ fn speed_table(page: &mut String, runs: &[Run]) {
                 .into_iter()
                 .flatten()
                 .find(|r| r["structure"] == name)
-                .map_or("-".into(), |r| sig(f(&r["mrays_per_s"])))
+                .map_or("-".into(), |r| three_digits(f(&r["mrays_per_s"])))
         };
         let cells: Vec<String> = rows.iter().map(|n| speed(n)).collect();
         let _ = writeln!(
@@ -462,13 +438,13 @@ fn scale_table(page: &mut String, run: &Run) {
             "| {} | {} | {} | {} | {} | {} | {} |",
             p["triangles"],
             p["structure"].as_str().unwrap_or("?"),
-            sig(f(&p["build_ns_per_triangle"])),
-            sig(f(&p["trace_ns_per_ray"])),
-            sig(f(&p["bytes_per_triangle"])),
+            three_digits(f(&p["build_ns_per_triangle"])),
+            three_digits(f(&p["trace_ns_per_ray"])),
+            three_digits(f(&p["bytes_per_triangle"])),
             p["peak_build_bytes"]
                 .as_f64()
-                .map_or("n/a".into(), |b| sig(b / (1024.0 * 1024.0))),
-            sig(f(&p["scratch_ratio"])),
+                .map_or("n/a".into(), |b| three_digits(b / (1024.0 * 1024.0))),
+            three_digits(f(&p["scratch_ratio"])),
         );
     }
 }
@@ -499,9 +475,9 @@ fn animate_table(page: &mut String, run: &Run) {
                 t["structure"].as_str().unwrap_or("?"),
                 t["strategy"].as_str().unwrap_or("?"),
                 fr["frame"],
-                sig(f(&fr["update_ms"])),
-                sig(f(&fr["trace_ms"])),
-                sig(f(&fr["sah"])),
+                three_digits(f(&fr["update_ms"])),
+                three_digits(f(&fr["trace_ms"])),
+                three_digits(f(&fr["sah"])),
             );
         }
     }

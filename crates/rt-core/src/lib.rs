@@ -108,7 +108,7 @@ pub use instance::{
 };
 pub use mailbox::Mailbox;
 pub use mesh::{Mesh, MeshError, Shading};
-pub use primitive::{PrimHit, Primitive, TriangleTest, valid_primitives};
+pub use primitive::{PrimHit, Primitive, TriangleTest, valid_bounds, valid_primitives};
 pub use ray::Ray;
 pub use refit::{Refit, RefitError};
 pub use rng::Rng;

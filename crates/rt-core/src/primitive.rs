@@ -136,6 +136,22 @@ pub trait Primitive: Clone + Send + Sync + Debug + 'static {
     }
 }
 
+/// The union of the bounds of the valid primitives (see [`Primitive::is_valid`]) among `prims`,
+/// [`Aabb::EMPTY`](crate::Aabb::EMPTY) if none: the box a camera frames or a query is measured
+/// in.
+///
+/// ```
+/// use rt_core::{Aabb, Triangle, glam::Vec3, valid_bounds};
+/// let tris = [Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y), Triangle::new(Vec3::NAN, Vec3::X, Vec3::Y)];
+/// assert_eq!(valid_bounds(&tris), Aabb::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0)));
+/// ```
+pub fn valid_bounds<'a, P: Primitive + 'a>(prims: impl IntoIterator<Item = &'a P>) -> crate::Aabb {
+    prims
+        .into_iter()
+        .filter(|p| p.is_valid())
+        .fold(crate::Aabb::EMPTY, |b, p| b.union(p.bounds()))
+}
+
 /// The indices of the valid primitives (see [`Primitive::is_valid`]) among the first 2³² - 1 of
 /// `prims`, in increasing order, and the union of their bounds ([`Aabb::EMPTY`] if none): what
 /// every builder starts from.

@@ -2,15 +2,12 @@
 //! (`cargo xtask animate`) and for the refit kit.
 
 use glam::{Quat, Vec3};
-use rt_core::{Aabb, Primitive, Rng, Triangle};
+use rt_core::{Aabb, Rng, Triangle};
 
 /// The box around the valid triangles and its largest side (1 for an empty or flat-to-a-point
 /// scene), which sets the size of every motion.
 fn extent(tris: &[Triangle]) -> (Aabb, f32) {
-    let bounds = tris
-        .iter()
-        .filter(|t| t.is_valid())
-        .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+    let bounds = rt_core::valid_bounds(tris.iter());
     let e = if bounds.is_empty() {
         1.0
     } else {

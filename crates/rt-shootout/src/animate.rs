@@ -12,7 +12,7 @@
 
 use crate::structures::{self, Entry, Query};
 use rt_core::DynAccel;
-use rt_core::{Aabb, Accel, BruteForce, Hit, Primitive, Ray, Triangle, predicted_cost};
+use rt_core::{Accel, BruteForce, Hit, Primitive, Ray, Triangle, predicted_cost};
 use rt_scene::motion::Animation;
 use rt_scene::scenes;
 use std::fmt::Write as _;
@@ -194,11 +194,7 @@ pub fn animate(args: &AnimateArgs, entries: &[Entry]) -> Result<AnimateReport, S
         .collect();
     // One camera for every frame, framing the whole animation, so each frame traces the same
     // rays and the times compare.
-    let bounds = frames
-        .iter()
-        .flatten()
-        .filter(|t| t.is_valid())
-        .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+    let bounds = rt_core::valid_bounds(frames.iter().flatten());
     let rays = scenes::camera_for(&args.scene, &bounds, args.width, args.height)
         .primary_rays(args.width, args.height);
     let checked: Vec<Ray> = rays

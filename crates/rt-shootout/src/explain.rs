@@ -6,7 +6,7 @@
 //! checked against brute force. `cargo xtask explain` prints what [`explain`] returns.
 
 use crate::structures::{self, Entry, Query};
-use rt_core::{Aabb, Accel, BruteForce, Hit, Primitive, Ray, Triangle};
+use rt_core::{Aabb, Accel, BruteForce, Hit, Ray, Triangle};
 use rt_scene::raygen::parse_rays;
 use rt_scene::scenes;
 
@@ -94,10 +94,7 @@ pub fn explain(args: &ExplainArgs, entries: &[Entry]) -> Result<String, String> 
         .map(|name| structures::find(entries, name))
         .collect::<Result<_, _>>()?;
     let (_, triangles) = crate::scene::load_scene(&args.scene)?;
-    let bounds = triangles
-        .iter()
-        .filter(|t| t.is_valid())
-        .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+    let bounds = rt_core::valid_bounds(triangles.iter());
     let ray = chosen_ray(args, &args.scene, &bounds)?;
     let walks: Vec<String> = rows
         .iter()

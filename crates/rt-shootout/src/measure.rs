@@ -70,3 +70,17 @@ pub fn measure<A: Accel>(
         rays: rays.len(),
     }
 }
+
+/// The CPU's model name (from `/proc/cpuinfo` on Linux), else the architecture: what a
+/// measurement's stamp names.
+pub fn cpu_model() -> String {
+    std::fs::read_to_string("/proc/cpuinfo")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("model name"))
+                .and_then(|l| l.split(':').nth(1))
+                .map(|m| m.trim().to_string())
+        })
+        .unwrap_or_else(|| std::env::consts::ARCH.to_string())
+}

@@ -14,7 +14,7 @@
 
 use crate::memory;
 use crate::structures::{self, Entry, Query};
-use rt_core::{Aabb, Hit, Primitive, Triangle};
+use rt_core::{Hit, Triangle};
 use rt_scene::scenes;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -160,10 +160,7 @@ impl Source {
             }
             Self::File(all) => {
                 let tris = all[..n.min(all.len())].to_vec();
-                let bounds = tris
-                    .iter()
-                    .filter(|t| t.is_valid())
-                    .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+                let bounds = rt_core::valid_bounds(tris.iter());
                 (tris, bounds, None)
             }
         };

@@ -2,7 +2,7 @@
 
 use super::Args;
 use super::points;
-use crate::data::{Report, Row};
+use crate::data::{Report, Row, three_digits};
 use rt_core::Hit;
 use std::fmt::Write as _;
 
@@ -157,16 +157,6 @@ pub(super) fn to_table(r: &Report) -> String {
         let _ = writeln!(s, "all answers agree");
     }
     s
-}
-
-/// Three significant digits, so that brute force's 0.000823 and a BVH's 25.5 both read well.
-fn three_digits(x: f64) -> String {
-    if x >= 100.0 || x == 0.0 {
-        format!("{x:.0}")
-    } else {
-        let decimals = (2 - x.log10().floor() as i32).clamp(0, 8) as usize;
-        format!("{x:.decimals$}")
-    }
 }
 
 fn hit_json(h: Option<Hit>, query_any: bool) -> serde_json::Value {

@@ -7,8 +7,8 @@
 use super::{Args, Report, Row, Source, build_fastest, checked_subset};
 use crate::structures;
 use rt_core::glam::Vec3;
-use rt_core::{Aabb, PointHit, Primitive};
 use rt_core::{DynAccel, Triangle};
+use rt_core::{PointHit, Primitive};
 use rt_scene::raygen;
 use std::time::{Duration, Instant};
 
@@ -54,10 +54,7 @@ pub(super) fn measure(
     if max.is_nan() || max < 0.0 {
         return Err(format!("--max-distance must be at least 0, not {max}"));
     }
-    let bounds = tris
-        .iter()
-        .filter(|t| t.is_valid())
-        .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+    let bounds = rt_core::valid_bounds(tris.iter());
     let queries: Vec<(Vec3, f32)> = raygen::query_points(&tris, &bounds, args.points, args.seed)
         .into_iter()
         .map(|p| (p, max))

@@ -311,10 +311,7 @@ impl Source {
     pub(crate) fn load(args: &Args) -> Result<Self, String> {
         let (scene, tris) = load_scene(&args.scene)?;
         let valid = tris.iter().filter(|t| t.is_valid()).count();
-        let bounds = tris
-            .iter()
-            .filter(|t| t.is_valid())
-            .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
+        let bounds = rt_core::valid_bounds(tris.iter());
         let mesh: std::sync::Arc<[Triangle]> = tris.into();
         let Some(count) = args.instances else {
             return Ok(Self {

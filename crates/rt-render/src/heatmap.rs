@@ -25,20 +25,6 @@ impl Metric {
         }
     }
 
-    /// The metric called `name`.
-    ///
-    /// # Errors
-    /// A one-line message naming the accepted values.
-    pub fn parse(name: &str) -> Result<Self, String> {
-        match name {
-            "visits" => Ok(Metric::Visits),
-            "tests" => Ok(Metric::Tests),
-            _ => Err(format!(
-                "unknown heatmap metric `{name}` (known: visits, tests)"
-            )),
-        }
-    }
-
     fn of(self, c: &Counters) -> u32 {
         let n = match self {
             Metric::Visits => c.node_visits,

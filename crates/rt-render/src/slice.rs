@@ -19,20 +19,6 @@ pub enum Coloring {
     Prims,
 }
 
-impl Coloring {
-    /// The coloring called `name` (`depth` or `prims`).
-    ///
-    /// # Errors
-    /// A one-line message naming the accepted values.
-    pub fn parse(name: &str) -> Result<Self, String> {
-        match name {
-            "depth" => Ok(Coloring::Depth),
-            "prims" => Ok(Coloring::Prims),
-            _ => Err(format!("unknown coloring `{name}` (known: depth, prims)")),
-        }
-    }
-}
-
 /// Where to cut and how to draw.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SliceOptions {

@@ -88,11 +88,6 @@ impl Animation {
     pub const ALL: [(&'static str, Animation); 2] =
         [("wave", Animation::Wave), ("explode", Animation::Explode)];
 
-    /// The animation called `name`.
-    pub fn named(name: &str) -> Option<Self> {
-        Self::ALL.iter().find(|(n, _)| *n == name).map(|&(_, a)| a)
-    }
-
     /// Frame `frame` of `frames` (frame 0 is `tris` itself).
     pub fn frame(self, tris: &[Triangle], frame: usize, frames: usize) -> Vec<Triangle> {
         let t = frame as f32 / frames.max(1) as f32;

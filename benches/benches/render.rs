@@ -60,8 +60,7 @@ fn median(mut v: Vec<f64>) -> f64 {
 }
 
 /// Counts the queries a render makes (only in the untimed pass: the shared counters would
-/// slow the timed ones). The renderer makes single queries only, so the others forward as they
-/// are.
+/// slow the timed ones). Single and bundle queries are counted per ray; the others forward as they are.
 struct Counting<'a> {
     inner: &'a dyn DynAccel<Shape>,
     closest: AtomicU64,
@@ -108,6 +107,19 @@ impl DynAccel<Shape> for Counting<'_> {
     }
     fn occluded_all(&self, rays: &[Ray], out: &mut [bool], counters: Option<&mut Counters>) {
         self.inner.occluded_all(rays, out, counters);
+    }
+    fn intersect_bundle_dyn(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        counters: Option<&mut Counters>,
+    ) {
+        self.closest.fetch_add(rays.len() as u64, Ordering::Relaxed);
+        self.inner.intersect_bundle_dyn(rays, out, counters);
+    }
+    fn occluded_bundle_dyn(&self, rays: &[Ray], out: &mut [bool], counters: Option<&mut Counters>) {
+        self.any.fetch_add(rays.len() as u64, Ordering::Relaxed);
+        self.inner.occluded_bundle_dyn(rays, out, counters);
     }
     fn closest_points_all(
         &self,

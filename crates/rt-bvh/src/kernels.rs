@@ -279,7 +279,12 @@ impl<S: Simd> RayData<S> {
     /// The ray's data for the whole traversal, from its slab-test part.
     #[inline(always)]
     pub fn new(simd: S, ray: &Ray, boxes: BoxRay<S>) -> Self {
-        let shear = Shear::new(ray.dir());
+        Self::with_shear(simd, ray, boxes, Shear::new(ray.dir()))
+    }
+
+    /// [`RayData::new`] with the ray's shear computed already (a bundle keeps each lane's).
+    #[inline(always)]
+    pub fn with_shear(simd: S, ray: &Ray, boxes: BoxRay<S>, shear: Shear) -> Self {
         let (o, d) = (ray.origin, ray.dir());
         let s4 = |x| simd.splat4(x);
         Self {

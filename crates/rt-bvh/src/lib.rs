@@ -76,6 +76,18 @@
 //! with rt-core's scalar functions, the reference the others are tested against. The only
 //! `unsafe` code is in `src/simd.rs`, each block with its reason.
 //!
+//! # Ray bundles
+//! [`Accel::intersect_bundle`] and [`Accel::occluded_bundle`] trace coherent rays (a camera's
+//! 8×8 pixel tiles, shadow rays towards one light) through the wide tree together, up to 64 of
+//! one direction octant at a time ([`rt_core::bundle`]): the interval-culled packet traversal of
+//! Wald, Boulos & Shirley (2007) with per-lane masks (Overbeck et al. 2008). At a node one
+//! vector test bounds every lane against all eight children; the children left are tested lane
+//! by lane with each lane's own slab arithmetic, eight lanes per vector; leaves run the single
+//! ray's triangle test for each lane that reached them (`bundle.rs`). Every lane answers exactly
+//! as its single ray does, bit for bit (the conformance kit checks it in every order and bundle
+//! size). A bundle of one ray, a ray with a zero direction component, and every ray of the
+//! binary tree take the single-ray path.
+//!
 //! # Tuning knobs ([`BvhParams`])
 //! - `layout`: [`Layout::Wide`] (default) or [`Layout::Binary`].
 //! - [`SplitMethod`]: binned SAH (the default; Wald 2007, pbrt-v4 §7.3), median split by count
@@ -168,6 +180,7 @@
 #![warn(missing_docs)]
 
 mod builder;
+mod bundle;
 mod instance;
 mod kernels;
 mod nearest;
@@ -182,6 +195,8 @@ pub use instance::Instances;
 pub use node::{ChildRef, Node, PACK, TriPack, WIDTH, WideNode};
 pub use rt_core::ValidationError;
 
+use bundle::Answers;
+use rt_core::bundle::{Bundle, Group};
 use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, Stats, TriangleTest};
 use simd::Isa;
 use traverse::{Packs, Prims, ScalarPacks};
@@ -521,28 +536,94 @@ impl<P: Primitive> Bvh<P> {
     }
 }
 
-impl<P: Primitive> Wide<P> {
-    /// The wide traversal with this tree's leaves, kernels and child ordering.
-    #[inline(always)]
-    fn walk<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        if self.ablation.sort_children {
-            self.walk_with::<S, ANY, true>(ray, stats)
-        } else {
-            self.walk_with::<S, ANY, false>(ray, stats)
-        }
-    }
-
-    #[inline(always)]
-    fn walk_with<S: Stats, const ANY: bool, const SORT: bool>(
+impl<P: Primitive> Bvh<P> {
+    /// The bundle queries' core: each of the first `slots` rays answered through `answer(slot,
+    /// answer)`, where an any-hit answer is `Some` when occluded. The wide tree traces coherent
+    /// rays as bundles (`bundle.rs`); a bundle of one ray, a ray that cannot travel in one, and
+    /// every ray of a binary tree take the single-ray path.
+    fn bundle_query<S: Stats, const ANY: bool>(
         &self,
-        ray: &Ray,
+        rays: &[Ray],
+        slots: usize,
         stats: &mut S,
-    ) -> Option<Hit> {
+        mut answer: impl FnMut(usize, Option<Hit>),
+    ) {
+        let rays = &rays[..rays.len().min(slots)];
+        let wide = match &self.tree {
+            Tree::Wide(w) if !w.nodes.is_empty() && (!ANY || w.ablation.any_hit_path) => w,
+            _ => {
+                for (slot, ray) in rays.iter().enumerate() {
+                    stats.single_ray();
+                    answer(slot, self.query::<S, ANY>(ray, stats));
+                }
+                return;
+            }
+        };
+        rt_core::bundle::for_each_bundle(rays, |group| match group {
+            Group::Bundle(b) if b.len() > 1 => {
+                let mut answers = Answers::new(b);
+                wide.bundle::<S, ANY>(b, &mut answers, stats);
+                for i in 0..b.len() {
+                    let done = answers.alive & 1 << i == 0;
+                    let best = answers.best[i];
+                    let hit = if ANY {
+                        done.then_some(best)
+                    } else {
+                        (best.prim != u32::MAX).then_some(best)
+                    };
+                    answer(b.slot[i] as usize, hit);
+                }
+            }
+            Group::Bundle(b) => {
+                stats.single_ray();
+                answer(b.slot[0] as usize, self.query::<S, ANY>(&b.ray(0), stats));
+            }
+            Group::Single(slot, ray) => {
+                stats.single_ray();
+                answer(slot, self.query::<S, ANY>(ray, stats));
+            }
+        });
+    }
+}
+
+/// A traversal to run over a wide tree's leaves, whichever kind they are: [`Wide::with_leaves`]
+/// picks the leaf test once and hands it to [`LeafWalk::walk`], so every traversal (single
+/// rays, bundles) shares one choice of kernels.
+trait LeafWalk {
+    type Out;
+    fn walk<L: traverse::Leaves>(self, nodes: &[WideNode], isa: Isa, leaves: &L) -> Self::Out;
+}
+
+/// One ray through [`traverse::wide`].
+struct OneRay<'a, S, const ANY: bool, const SORT: bool>(&'a Ray, &'a mut S);
+
+impl<S: Stats, const ANY: bool, const SORT: bool> LeafWalk for OneRay<'_, S, ANY, SORT> {
+    type Out = Option<Hit>;
+    #[inline(always)]
+    fn walk<L: traverse::Leaves>(self, nodes: &[WideNode], isa: Isa, leaves: &L) -> Option<Hit> {
+        simd::dispatch::<_, S, ANY, SORT>(isa, nodes, leaves, self.0, self.1)
+    }
+}
+
+/// One bundle through [`bundle::wide_bundle`].
+struct OneBundle<'a, S, const ANY: bool>(&'a Bundle, &'a mut Answers, &'a mut S);
+
+impl<S: Stats, const ANY: bool> LeafWalk for OneBundle<'_, S, ANY> {
+    type Out = ();
+    #[inline(always)]
+    fn walk<L: traverse::Leaves>(self, nodes: &[WideNode], isa: Isa, leaves: &L) {
+        simd::dispatch_bundle::<_, S, ANY>(isa, nodes, leaves, self.0, self.1, self.2)
+    }
+}
+
+impl<P: Primitive> Wide<P> {
+    /// Runs `walk` with this tree's leaves and kernels.
+    #[inline(always)]
+    fn with_leaves<W: LeafWalk>(&self, walk: W) -> W::Out {
         let (nodes, isa) = (&self.nodes[..], self.isa);
         match (&self.leaves, self.kernels) {
             (Leaves::Packs { packs, test }, Kernels::Scalar) => {
-                let leaves = ScalarPacks { packs, test: *test };
-                simd::dispatch::<_, S, ANY, SORT>(isa, nodes, &leaves, ray, stats)
+                walk.walk(nodes, isa, &ScalarPacks { packs, test: *test })
             }
             (
                 Leaves::Packs {
@@ -550,27 +631,37 @@ impl<P: Primitive> Wide<P> {
                     test: TriangleTest::Watertight,
                 },
                 _,
-            ) => {
-                let leaves = Packs::<false> { packs };
-                simd::dispatch::<_, S, ANY, SORT>(isa, nodes, &leaves, ray, stats)
-            }
+            ) => walk.walk(nodes, isa, &Packs::<false> { packs }),
             (
                 Leaves::Packs {
                     packs,
                     test: TriangleTest::MollerTrumbore,
                 },
                 _,
-            ) => {
-                let leaves = Packs::<true> { packs };
-                simd::dispatch::<_, S, ANY, SORT>(isa, nodes, &leaves, ray, stats)
-            }
-            (Leaves::Items(items), _) => {
-                let leaves = Prims {
+            ) => walk.walk(nodes, isa, &Packs::<true> { packs }),
+            (Leaves::Items(items), _) => walk.walk(
+                nodes,
+                isa,
+                &Prims {
                     prims: &items.prims,
                     ids: &items.ids,
-                };
-                simd::dispatch::<_, S, ANY, SORT>(isa, nodes, &leaves, ray, stats)
-            }
+                },
+            ),
+        }
+    }
+
+    /// The bundle traversal with this tree's leaves and kernels.
+    fn bundle<S: Stats, const ANY: bool>(&self, b: &Bundle, answers: &mut Answers, stats: &mut S) {
+        self.with_leaves(OneBundle::<S, ANY>(b, answers, stats));
+    }
+
+    /// The wide traversal with this tree's leaves, kernels and child ordering.
+    #[inline(always)]
+    fn walk<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        if self.ablation.sort_children {
+            self.with_leaves(OneRay::<S, ANY, true>(ray, stats))
+        } else {
+            self.with_leaves(OneRay::<S, ANY, false>(ray, stats))
         }
     }
 }
@@ -657,6 +748,23 @@ impl<P: Primitive> Accel for Bvh<P> {
     #[inline]
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
         self.query::<S, true>(ray, stats).is_some()
+    }
+
+    /// Coherent rays of the wide tree walk it in bundles (`bundle.rs`); see
+    /// [`rt_core::bundle`] for how their steps count.
+    fn intersect_bundle_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        stats: &mut S,
+    ) {
+        self.bundle_query::<S, false>(rays, out.len(), stats, |slot, hit| out[slot] = hit);
+    }
+
+    fn occluded_bundle_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
+        self.bundle_query::<S, true>(rays, out.len(), stats, |slot, hit| {
+            out[slot] = hit.is_some()
+        });
     }
 
     fn bounds(&self) -> rt_core::Aabb {

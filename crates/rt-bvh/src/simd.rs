@@ -7,18 +7,21 @@
 //!   sound because an `Avx2` value can only be made by [`Avx2::detect`], after the CPU reported
 //!   AVX2 and FMA. The wide traversal (`traverse::wide`) is compiled once inside [`wide_avx2`]
 //!   (a `#[target_feature(enable = "avx2,fma")]` function, where the intrinsics inline) and once
-//!   for the baseline target with [`Portable`]. A plain `cargo build` without `RUSTFLAGS`
+//!   for the baseline target with [`Portable`]; the bundle traversal (`bundle::wide_bundle`)
+//!   likewise, inside [`bundle_avx2`]. A plain `cargo build` without `RUSTFLAGS`
 //!   therefore runs AVX2 code on CPUs that have it and baseline code elsewhere (SSE2 on x86-64;
 //!   aarch64 compiles the portable kernels only).
 //! - [`Stack`] leaves its slots uninitialised, so a ray does not pay for zeroing hundreds of
 //!   entries it will never use; it reads a slot only after writing it.
 #![allow(unsafe_code)]
 
+use crate::bundle::{Answers, wide_bundle};
 use crate::kernels::Portable;
 #[cfg(target_arch = "x86_64")]
 use crate::kernels::Simd;
 use crate::node::WideNode;
 use crate::traverse::{Leaves, wide};
+use rt_core::bundle::Bundle;
 use rt_core::{Hit, Ray, Stats};
 use std::mem::MaybeUninit;
 
@@ -82,6 +85,45 @@ fn wide_avx2<L: Leaves, S: Stats, const ANY: bool, const SORT: bool>(
     stats: &mut S,
 ) -> Option<Hit> {
     wide::<Avx2, L, S, ANY, SORT>(simd, nodes, leaves, ray, stats)
+}
+
+/// Runs the bundle traversal with the instruction set `isa`.
+#[inline(always)]
+pub(crate) fn dispatch_bundle<L: Leaves, S: Stats, const ANY: bool>(
+    isa: Isa,
+    nodes: &[WideNode],
+    leaves: &L,
+    b: &Bundle,
+    answers: &mut Answers,
+    stats: &mut S,
+) {
+    match isa {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: an `Avx2` value exists only if `Avx2::detect` found AVX2 and FMA on this CPU,
+        // which is all `bundle_avx2` requires.
+        Isa::Avx2(simd) => unsafe {
+            bundle_avx2::<L, S, ANY>(simd, nodes, leaves, b, answers, stats)
+        },
+        #[cfg(target_arch = "x86_64")]
+        Isa::Sse2 => wide_bundle::<Sse2, L, S, ANY>(Sse2, nodes, leaves, b, answers, stats),
+        Isa::Portable => {
+            wide_bundle::<Portable, L, S, ANY>(Portable, nodes, leaves, b, answers, stats)
+        }
+    }
+}
+
+/// The bundle traversal, compiled with AVX2 and FMA enabled so the intrinsics inline.
+#[cfg(target_arch = "x86_64")]
+#[target_feature(enable = "avx2,fma")]
+fn bundle_avx2<L: Leaves, S: Stats, const ANY: bool>(
+    simd: Avx2,
+    nodes: &[WideNode],
+    leaves: &L,
+    b: &Bundle,
+    answers: &mut Answers,
+    stats: &mut S,
+) {
+    wide_bundle::<Avx2, L, S, ANY>(simd, nodes, leaves, b, answers, stats);
 }
 
 #[cfg(target_arch = "x86_64")]

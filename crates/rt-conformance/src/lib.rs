@@ -19,7 +19,9 @@
 //! answer; for every closest-point query ([`scene_points`]: points on, near and far from the
 //! primitives, with and without a maximum distance), the same primitive and a distance within a
 //! relative 1e-5 ([`PointHit::agree`]); the answer must not change when statistics are counted;
-//! and the structure must report the number of valid primitives it kept.
+//! and the structure must report the number of valid primitives it kept. The bundle queries
+//! ([`Accel::intersect_bundle`], [`Accel::occluded_bundle`]) must give, ray for ray, the same
+//! bits as the single queries, whatever bundles the rays come in ([`compare_bundles`]).
 //!
 //! The number of proptest cases is proptest's default (256) unless `PROPTEST_CASES` is set.
 //!
@@ -42,8 +44,10 @@ use std::fmt;
 #[doc(hidden)]
 pub use rt_core;
 
+mod bundles;
 mod instances;
 mod refit;
+pub use bundles::{BUNDLE_SIZES, bundle_orders, compare_bundles, same_bits};
 pub use instances::{
     BottomBuilder, InstancedCase, Placement, TWO_LEVEL_SCENES, check_two_level_case,
     check_two_level_random, check_two_level_scene, two_level_scene,
@@ -460,6 +464,9 @@ fn check_queries<A: Accel + 'static>(
             .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
         compare_rays_probed(&accel, &reference, &rays, probe, any)
             .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
+        // The single queries agree with brute force; the bundle queries must agree with them.
+        bundles::compare_bundles_probed(&accel, &rays, any, probe)
+            .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
         if any {
             let points = scene_points(&prims, &rays);
             compare_points_probed(&accel, &reference, &points, probe)
@@ -493,6 +500,7 @@ enum Doing {
     Starting,
     Phase(&'static str, usize),
     Tracing(Ray),
+    Bundle(Ray, usize),
     Point(Vec3, f32),
 }
 
@@ -513,6 +521,9 @@ impl Probe {
     fn tracing(&self, ray: &Ray) {
         self.set(Doing::Tracing(*ray));
     }
+    fn bundle(&self, first: &Ray, len: usize) {
+        self.set(Doing::Bundle(*first, len));
+    }
     fn doing(&self) -> String {
         match self.doing.lock().as_deref() {
             Ok(Doing::Starting) | Err(_) => "starting".into(),
@@ -521,6 +532,11 @@ impl Probe {
             Ok(Doing::Tracing(ray)) => {
                 format!("ray {}\n  rays-file line: {}", ray.to_rust(), ray.to_line())
             }
+            Ok(Doing::Bundle(ray, len)) => format!(
+                "a bundle query of {len} rays, the first {}\n  rays-file line: {}",
+                ray.to_rust(),
+                ray.to_line()
+            ),
             Ok(Doing::Point(p, max)) => format!(
                 "closest_point(Vec3::new({:?}, {:?}, {:?}), {max:?})",
                 p.x, p.y, p.z

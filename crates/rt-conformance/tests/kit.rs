@@ -405,3 +405,73 @@ fn slice_queries_that_differ_from_single_ones_fail() {
         "{uncounted}"
     );
 }
+
+/// A structure whose bundle traversal drops a lane: the last lane of every bundle of two or more
+/// rays gets no hit (and counts as not occluded). Single rays and rays that travel alone are
+/// brute force's.
+struct DropsLane(BruteForce<Triangle>);
+
+impl Accel for DropsLane {
+    forward_to_brute_force!();
+    const NAME: &'static str = "drops-lane";
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        self.0.intersect_with(ray, stats)
+    }
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.ball_query(query, stats);
+    }
+    fn intersect_bundle_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        stats: &mut S,
+    ) {
+        self.lanes(rays, out.len(), |slot, ray, dropped| {
+            out[slot] = (!dropped)
+                .then(|| self.0.intersect_with(ray, stats))
+                .flatten();
+        });
+    }
+    fn occluded_bundle_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
+        self.lanes(rays, out.len(), |slot, ray, dropped| {
+            out[slot] = !dropped && self.0.occluded_with(ray, stats);
+        });
+    }
+}
+
+impl DropsLane {
+    /// Calls `answer(slot, ray, dropped)` for each of the first `slots` rays, `dropped` for the
+    /// last lane of a bundle of two or more.
+    fn lanes(&self, rays: &[Ray], slots: usize, mut answer: impl FnMut(usize, &Ray, bool)) {
+        let rays = &rays[..rays.len().min(slots)];
+        rt_core::bundle::for_each_bundle(rays, |group| match group {
+            rt_core::bundle::Group::Bundle(b) => {
+                for i in 0..b.len() {
+                    let slot = b.slot[i] as usize;
+                    answer(slot, &rays[slot], b.len() > 1 && i == b.len() - 1);
+                }
+            }
+            rt_core::bundle::Group::Single(slot, ray) => answer(slot, ray, false),
+        });
+    }
+}
+
+/// The bundle check passes brute force (whose bundle queries loop over single rays) and fails
+/// a bundle traversal that drops a lane, naming the ray, the order and the bundle size.
+#[test]
+fn a_bundle_traversal_that_drops_a_lane_fails() {
+    let s = scene("shared_edge");
+    let brute = BruteForce::build(&s.triangles, &());
+    rt_conformance::compare_bundles(&brute, &s.rays, true).unwrap();
+    let e = rt_conformance::compare_bundles(&DropsLane(brute), &s.rays, true)
+        .expect_err("a dropped lane must be caught");
+    assert!(
+        e.starts_with("drops-lane: intersect_bundle gives None where intersect gives Some"),
+        "{e}"
+    );
+    assert!(e.contains("in bundles of 7 (rays as given)"), "{e}");
+    // Through the whole kit too: the scene's check fails on the bundles.
+    let e = check_case_within::<DropsLane>(&(), &s.triangles, &s.rays, Duration::from_secs(20))
+        .expect_err("the kit must run the bundle check");
+    assert!(e.contains("intersect_bundle gives"), "{e}");
+}

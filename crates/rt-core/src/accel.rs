@@ -180,6 +180,58 @@ pub trait Accel: Sized + Send + Sync {
         self.occluded_with(ray, &mut NoStats)
     }
 
+    /// The closest hit of each ray of `rays`, into the same slot of `out`, reporting events to
+    /// `stats`: as many rays as both slices have slots (the rest of the longer one is left
+    /// alone; nothing panics on a length mismatch).
+    ///
+    /// Every answer is exactly what [`intersect_with`](Accel::intersect_with) returns for that
+    /// ray: the same primitive and the same bits of `t`, `u` and `v`. The default does exactly
+    /// that, one ray at a time ([`bundle::intersect_each`](crate::bundle::intersect_each)); a
+    /// structure that traces coherent rays together overrides it and counts as the
+    /// [`bundle`](crate::bundle) module describes.
+    #[inline]
+    fn intersect_bundle_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        stats: &mut S,
+    ) {
+        crate::bundle::intersect_each(self, rays, out, stats);
+    }
+
+    /// Whether anything is hit in each ray's interval, into the same slot of `out`: as many rays
+    /// as both slices have slots, each answer exactly [`occluded_with`](Accel::occluded_with)'s.
+    #[inline]
+    fn occluded_bundle_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
+        crate::bundle::occluded_each(self, rays, out, stats);
+    }
+
+    /// [`intersect_bundle_with`](Accel::intersect_bundle_with), uncounted.
+    ///
+    /// ```
+    /// use rt_core::{Accel, BruteForce, Ray, Triangle, glam::Vec3};
+    /// let tris = [Triangle::new(Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::Y)];
+    /// let accel = BruteForce::build(&tris, &());
+    /// // An 8×8 tile of parallel rays, half of them beside the triangle.
+    /// let rays: Vec<Ray> = (0..64)
+    ///     .map(|i| Ray::new(Vec3::new((i % 8) as f32 * 0.25 - 1.0, 0.0, -2.0), Vec3::Z))
+    ///     .collect();
+    /// let mut hits = vec![None; rays.len()];
+    /// accel.intersect_bundle(&rays, &mut hits);
+    /// assert_eq!(hits[3].map(|h| (h.prim, h.t)), Some((0, 2.0)));
+    /// assert!(hits.iter().zip(&rays).all(|(h, r)| *h == accel.intersect(r)));
+    /// ```
+    #[inline]
+    fn intersect_bundle(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        self.intersect_bundle_with(rays, out, &mut NoStats);
+    }
+
+    /// [`occluded_bundle_with`](Accel::occluded_bundle_with), uncounted.
+    #[inline]
+    fn occluded_bundle(&self, rays: &[Ray], out: &mut [bool]) {
+        self.occluded_bundle_with(rays, out, &mut NoStats);
+    }
+
     /// The box around every valid primitive the structure holds ([`Aabb::EMPTY`] if none).
     fn bounds(&self) -> Aabb;
 

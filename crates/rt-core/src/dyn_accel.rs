@@ -50,6 +50,34 @@ pub trait DynAccel<P>: Send + Sync {
     /// [`Accel::occluded`] for each ray into the same slot of `out` (as many as both have),
     /// counted into `counters` if given.
     fn occluded_all(&self, rays: &[Ray], out: &mut [bool], counters: Option<&mut Counters>);
+    /// [`Accel::intersect_bundle`]: the rays traced as the structure's bundles, counted into
+    /// `counters` if given (as the [`bundle`](crate::bundle) module describes). The default,
+    /// for wrappers that trace no bundles, is [`intersect_all`](DynAccel::intersect_all), each
+    /// ray counted as traced singly.
+    fn intersect_bundle_dyn(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        mut counters: Option<&mut Counters>,
+    ) {
+        if let Some(c) = counters.as_deref_mut() {
+            c.single_rays += rays.len().min(out.len()) as u64;
+        }
+        self.intersect_all(rays, out, counters);
+    }
+    /// [`Accel::occluded_bundle`], counted into `counters` if given. The default is
+    /// [`occluded_all`](DynAccel::occluded_all), each ray counted as traced singly.
+    fn occluded_bundle_dyn(
+        &self,
+        rays: &[Ray],
+        out: &mut [bool],
+        mut counters: Option<&mut Counters>,
+    ) {
+        if let Some(c) = counters.as_deref_mut() {
+            c.single_rays += rays.len().min(out.len()) as u64;
+        }
+        self.occluded_all(rays, out, counters);
+    }
     /// [`Accel::closest_point`] for each `(point, max_distance)` into the same slot of `out` (as
     /// many as both have), counted into `counters` if given.
     fn closest_points_all(
@@ -143,6 +171,25 @@ impl<A: Accel> DynAccel<A::Prim> for A {
         match counters {
             Some(c) => pairs.for_each(|(o, r)| *o = self.occluded_with(r, c)),
             None => pairs.for_each(|(o, r)| *o = self.occluded_with(r, &mut NoStats)),
+        }
+    }
+
+    fn intersect_bundle_dyn(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        counters: Option<&mut Counters>,
+    ) {
+        match counters {
+            Some(c) => self.intersect_bundle_with(rays, out, c),
+            None => self.intersect_bundle_with(rays, out, &mut NoStats),
+        }
+    }
+
+    fn occluded_bundle_dyn(&self, rays: &[Ray], out: &mut [bool], counters: Option<&mut Counters>) {
+        match counters {
+            Some(c) => self.occluded_bundle_with(rays, out, c),
+            None => self.occluded_bundle_with(rays, out, &mut NoStats),
         }
     }
 

@@ -34,6 +34,12 @@
 //! also has the camera a renderer needs (`rt_scene::Camera`), or from buffers you already have
 //! ([`IndexedTriangles::from_flat`]).
 //!
+//! # Many rays at once
+//! [`Accel::intersect_bundle`] and [`Accel::occluded_bundle`] answer a slice of rays, each
+//! exactly as the single-ray query would; structures that trace coherent rays together (a
+//! camera's tiles, a light's shadow rays) override them. [`bundle::intersect_frame`] traces a
+//! whole frame that way on all threads. See the [`bundle`] module.
+//!
 //! # Closest points
 //! [`Accel::closest_point`] finds the primitive nearest to a point (a [`PointHit`]: index, point,
 //! distance). Structures implement one traversal, [`Accel::ball_query`], over a [`BallQuery`]
@@ -69,6 +75,7 @@
 mod aabb;
 mod accel;
 mod brute;
+pub mod bundle;
 mod clip;
 mod closest;
 mod cost;
@@ -94,6 +101,7 @@ mod triangle;
 pub use aabb::{Aabb, NEAR_TIE, SLAB_FAR_SCALE};
 pub use accel::{Accel, BuildStats, Hit, Region, ValidationError};
 pub use brute::BruteForce;
+pub use bundle::{BUNDLE_LANES, Bundle, LaneBounds};
 pub use clip::{clip_triangle_bounds, split_triangle_bounds};
 pub use closest::{
     BallQuery, ClosestPointQuery, PointHit, closest_point_on_triangle, point_distance,

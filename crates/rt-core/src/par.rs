@@ -102,6 +102,33 @@ pub fn map_chunks_mut<T: Send, R: Send>(
     }
 }
 
+/// `f(input_chunk, output_chunk)` for matching chunks of `size` items of `input` and `out` (as
+/// many items as both have; the last chunk may be shorter).
+pub fn zip_chunks_mut<T: Sync, U: Send>(
+    input: &[T],
+    out: &mut [U],
+    size: usize,
+    f: impl Fn(&[T], &mut [U]) + Sync + Send,
+) {
+    let n = input.len().min(out.len());
+    let (input, out) = (&input[..n], &mut out[..n]);
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        input
+            .par_chunks(size)
+            .zip(out.par_chunks_mut(size))
+            .for_each(|(i, o)| f(i, o));
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        input
+            .chunks(size)
+            .zip(out.chunks_mut(size))
+            .for_each(|(i, o)| f(i, o));
+    }
+}
+
 /// Folds chunks of `size` items into accumulators made by `init` and combines those with
 /// `reduce` (`init()` for no items). The grouping of chunks into accumulators is not fixed, so
 /// `fold` and `reduce` must give the same answer for any grouping (sums, minima and maxima).

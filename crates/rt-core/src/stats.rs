@@ -29,6 +29,18 @@ pub trait Stats {
     /// A primitive test was skipped because a mailbox showed the primitive was already tested.
     #[inline(always)]
     fn mailbox_skip(&mut self) {}
+    /// A bundle of `lanes` rays, `active` of them still tracing there, entered the node or
+    /// cell just reported by [`Stats::node_visit`] (see the [`bundle`](crate::bundle) module:
+    /// a bundle's step counts as one visit).
+    #[inline(always)]
+    fn bundle_lanes(&mut self, lanes: u32, active: u32) {
+        let _ = (lanes, active);
+    }
+    /// A bundle traversal gave one of its rays to the single-ray traversal (a ray that cannot
+    /// travel in a bundle, or one of too few lanes left active); that ray's events follow as a
+    /// single ray's.
+    #[inline(always)]
+    fn single_ray(&mut self) {}
     /// Counts gathered elsewhere (by a structure called through a trait object), added as if
     /// each event had been reported here.
     fn add(&mut self, counters: &Counters) {
@@ -40,6 +52,14 @@ pub trait Stats {
         }
         for _ in 0..counters.mailbox_skips {
             self.mailbox_skip();
+        }
+        for _ in 0..counters.single_rays {
+            self.single_ray();
+        }
+        // The lane counts add up as one step of their totals: what a sink can sum of them.
+        if counters.lane_slots != 0 {
+            let clamp = |x: u64| x.min(u32::MAX as u64) as u32;
+            self.bundle_lanes(clamp(counters.lane_slots), clamp(counters.lanes_active));
         }
     }
     /// One step of the walk, with its context; called only when [`Stats::TRACE`] is true.
@@ -72,6 +92,12 @@ pub struct Counters {
     pub prim_tests: u64,
     /// Primitive tests a mailbox saved.
     pub mailbox_skips: u64,
+    /// Over the node visits of bundles, the lanes the bundles carried.
+    pub lane_slots: u64,
+    /// Over the node visits of bundles, the lanes still active there.
+    pub lanes_active: u64,
+    /// Rays a bundle traversal traced singly.
+    pub single_rays: u64,
 }
 
 impl Counters {
@@ -81,7 +107,16 @@ impl Counters {
             node_visits: self.node_visits + o.node_visits,
             prim_tests: self.prim_tests + o.prim_tests,
             mailbox_skips: self.mailbox_skips + o.mailbox_skips,
+            lane_slots: self.lane_slots + o.lane_slots,
+            lanes_active: self.lanes_active + o.lanes_active,
+            single_rays: self.single_rays + o.single_rays,
         }
+    }
+
+    /// The share of a bundle's lanes active at the nodes it visited (1 when every lane walks
+    /// every node the bundle does), or `None` when no bundle was counted.
+    pub fn lane_utilisation(&self) -> Option<f64> {
+        (self.lane_slots != 0).then(|| self.lanes_active as f64 / self.lane_slots as f64)
     }
 }
 
@@ -101,5 +136,14 @@ impl Stats for Counters {
     #[inline(always)]
     fn mailbox_skip(&mut self) {
         self.mailbox_skips += 1;
+    }
+    #[inline(always)]
+    fn bundle_lanes(&mut self, lanes: u32, active: u32) {
+        self.lane_slots += lanes as u64;
+        self.lanes_active += active as u64;
+    }
+    #[inline(always)]
+    fn single_ray(&mut self) {
+        self.single_rays += 1;
     }
 }

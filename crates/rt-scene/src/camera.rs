@@ -127,6 +127,44 @@ impl Camera {
     }
 }
 
+impl Camera {
+    /// One ray through the centre of each pixel of a `width × height` image, tile by tile: the
+    /// image cut into `tile.0 × tile.1` pixel tiles (narrower at the right and bottom edges),
+    /// tiles row by row from the top left, and each tile's pixels row by row. Neighbouring rays
+    /// then sit side by side in the list, as a bundle query wants them
+    /// ([`rt_core::Accel::intersect_bundle`]); an 8×8 tile fills one 64-lane bundle. Returns the
+    /// rays and, for each, its pixel index `y · width + x`.
+    ///
+    /// ```
+    /// use rt_core::{Aabb, glam::Vec3};
+    /// use rt_scene::Camera;
+    /// let camera = Camera::framing(&Aabb::new(Vec3::ZERO, Vec3::ONE), 20, 10);
+    /// let (rays, pixels) = camera.tiled_rays(20, 10, (8, 8));
+    /// let rows = camera.primary_rays(20, 10);
+    /// assert_eq!(rays.len(), rows.len());
+    /// assert_eq!(&pixels[..3], &[0, 1, 2]);
+    /// assert_eq!(pixels[8], 20); // the first tile's second row
+    /// assert!(rays.iter().zip(&pixels).all(|(r, &p)| *r == rows[p as usize]));
+    /// ```
+    pub fn tiled_rays(&self, width: u32, height: u32, tile: (u32, u32)) -> (Vec<Ray>, Vec<u32>) {
+        let raster = self.raster(width, height);
+        let (tw, th) = (tile.0.max(1), tile.1.max(1));
+        let n = width as usize * height as usize;
+        let (mut rays, mut pixels) = (Vec::with_capacity(n), Vec::with_capacity(n));
+        for ty in (0..height).step_by(th as usize) {
+            for tx in (0..width).step_by(tw as usize) {
+                for y in ty..(ty + th).min(height) {
+                    for x in tx..(tx + tw).min(width) {
+                        rays.push(raster.ray(x as f32 + 0.5, y as f32 + 0.5));
+                        pixels.push(y * width + x);
+                    }
+                }
+            }
+        }
+        (rays, pixels)
+    }
+}
+
 /// A [`Camera`] set up for one image size (see [`Camera::raster`]).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Raster {

@@ -41,6 +41,20 @@ pub fn count(text: &str) -> Result<usize, String> {
     })
 }
 
+/// Parses a tile size `WxH` in pixels (`8x8`, `16x4`), each side 1 to 256.
+///
+/// ```
+/// assert_eq!(rt_shootout::cli::tile("8x8"), Ok((8, 8)));
+/// assert_eq!(rt_shootout::cli::tile("16X4"), Ok((16, 4)));
+/// assert!(rt_shootout::cli::tile("8").is_err() && rt_shootout::cli::tile("0x8").is_err());
+/// ```
+pub fn tile(text: &str) -> Result<(u32, u32), String> {
+    let bad = || format!("`{text}` is not a tile size (WxH in pixels, each 1 to 256: 8x8, 16x4)");
+    let (w, h) = text.split_once(['x', 'X']).ok_or_else(bad)?;
+    let side = |v: &str| v.parse::<u32>().ok().filter(|n| (1..=256).contains(n));
+    Ok((side(w).ok_or_else(bad)?, side(h).ok_or_else(bad)?))
+}
+
 /// Prints a command-line error as one `error:` line and exits with status 2 (`--help` and
 /// `--version` print as usual and exit 0). clap's own message spans several lines (the possible
 /// values, a hint, a usage line); they are joined so that every bad input, clap's or ours, is one

@@ -34,6 +34,27 @@ pub struct Row {
     pub predicted: Option<PredictedCost>,
     /// Every ray's answer (kept only when the report prints them, with `--rays-file`).
     pub(crate) answers: Vec<Option<Hit>>,
+    /// The same rays traced as bundles (`compare --bundle`).
+    pub bundle: Option<BundleRow>,
+}
+
+/// A row's rays traced as bundles ([`rt_core::Accel::intersect_bundle`]), beside its single rays.
+#[derive(Clone, Debug, PartialEq)]
+pub struct BundleRow {
+    /// Speed of the bundle pass.
+    pub mrays_per_s: f64,
+    /// The bundle pass's speed over the same row's single rays, measured in the same run.
+    pub over_single: f64,
+    /// Nodes or cells entered per ray: a bundle's step counts once for all its lanes.
+    pub avg_visits: f64,
+    /// Primitive tests per ray.
+    pub avg_prim_tests: f64,
+    /// The share of a bundle's lanes active at its steps (`None`: the row traced no bundle).
+    pub lane_utilisation: Option<f64>,
+    /// The share of rays the row traced singly (rays a bundle cannot carry, bundles of one).
+    pub single_share: f64,
+    /// Rays whose bundle answer differs from the single answer in any bit.
+    pub differences: usize,
 }
 
 /// The cost the surface area heuristic predicts per traced ray: its expectation for a line
@@ -84,9 +105,12 @@ pub struct Report {
 }
 
 impl Report {
-    /// Mismatches over every row.
+    /// Mismatches over every row, and bundle answers that differ from the single ones.
     pub fn total_mismatches(&self) -> usize {
-        self.rows.iter().map(|r| r.mismatches).sum()
+        self.rows
+            .iter()
+            .map(|r| r.mismatches + r.bundle.as_ref().map_or(0, |b| b.differences))
+            .sum()
     }
 
     /// The share of the rays that hit the scene (any-hit rays: that are occluded), from the first

@@ -9,9 +9,13 @@
 //!   answer each ray exactly as brute force does (the conformance kit's rule), invalid rays
 //!   included; with raw `f32` coordinates it must not panic or loop, and invalid rays must not
 //!   hit.
+//! - [`bundle`]: the same cases; every structure's bundle queries must answer each ray exactly
+//!   as its single-ray queries do (the same bits), in every order and bundle size the kit uses
+//!   ([`rt_conformance::compare_bundles`]), raw coordinates included: that promise has no
+//!   conditioning caveat, since both answers come from the same structure.
 
 use rt_bvh::{Bvh, BvhParams};
-use rt_conformance::compare_rays;
+use rt_conformance::{compare_bundles, compare_rays};
 use rt_core::glam::Vec3;
 use rt_core::{Accel, BruteForce, Ray, Triangle};
 use rt_grid::{Grid, GridParams};
@@ -213,6 +217,34 @@ pub fn trace(bytes: &[u8]) -> Result<(), String> {
         Octree::build(&case.tris, &OctreeParams::default())
     );
     Ok(())
+}
+
+/// The body of the `bundle` fuzz target: [`decode`]s the case, builds every structure and
+/// checks that its bundle queries give its single-ray answers bit for bit
+/// ([`compare_bundles`]).
+///
+/// # Errors
+/// The first structure whose bundle answer differs, with the ray, the order and the bundle size.
+pub fn bundle(bytes: &[u8]) -> Result<(), String> {
+    let case = decode(bytes);
+    if case.tris.is_empty() {
+        return Ok(());
+    }
+    let rays = &case.rays;
+    compare_bundles(&Bvh::build(&case.tris, &BvhParams::default()), rays, true)?;
+    compare_bundles(&Bvh::build(&case.tris, &BvhParams::sah()), rays, true)?;
+    compare_bundles(&KdTree::build(&case.tris, &KdParams::default()), rays, true)?;
+    compare_bundles(&Grid::build(&case.tris, &GridParams::default()), rays, true)?;
+    compare_bundles(
+        &HGrid::build(&case.tris, &HGridParams::default()),
+        rays,
+        true,
+    )?;
+    compare_bundles(
+        &Octree::build(&case.tris, &OctreeParams::default()),
+        rays,
+        true,
+    )
 }
 
 fn compare<A: Accel<Prim = Triangle>>(

@@ -73,20 +73,34 @@ fn counted_chunks<T: Sync, A: Clone + Send>(
     (answers, counters)
 }
 
+/// How a pass hands its rays to a structure.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pass {
+    /// One ray per query ([`DynAccel::intersect_all`], [`DynAccel::occluded_all`]).
+    Single,
+    /// As bundles ([`DynAccel::intersect_bundle_dyn`], [`DynAccel::occluded_bundle_dyn`]).
+    Bundles,
+}
+
 /// One task's answers to `rays` into `out`, counted into `counters` if given.
 fn answer_chunk(
     s: &dyn DynAccel<Triangle>,
     rays: &[Ray],
     query: Query,
+    pass: Pass,
     out: &mut [Option<Hit>],
     counters: Option<&mut Counters>,
 ) {
-    match query {
-        Query::Closest => s.intersect_all(rays, out, counters),
-        Query::Any => {
+    match (query, pass) {
+        (Query::Closest, Pass::Single) => s.intersect_all(rays, out, counters),
+        (Query::Closest, Pass::Bundles) => s.intersect_bundle_dyn(rays, out, counters),
+        (Query::Any, _) => {
             let mut blocked = [false; CHUNK];
             let blocked = &mut blocked[..rays.len().min(CHUNK)];
-            s.occluded_all(rays, blocked, counters);
+            match pass {
+                Pass::Single => s.occluded_all(rays, blocked, counters),
+                Pass::Bundles => s.occluded_bundle_dyn(rays, blocked, counters),
+            }
             for (o, &b) in out.iter_mut().zip(blocked.iter()) {
                 *o = b.then_some(OCCLUDED);
             }
@@ -101,19 +115,35 @@ pub fn trace_counted(
     rays: &[Ray],
     query: Query,
 ) -> (Vec<Option<Hit>>, Counters) {
+    trace_counted_as(s, rays, query, Pass::Single)
+}
+
+/// [`trace_counted`], handing the rays over as `pass` says. Tasks take 256 rays, four full
+/// bundles, so a bundle pass sees the rays' order in runs of 64 as they come.
+pub fn trace_counted_as(
+    s: &dyn DynAccel<Triangle>,
+    rays: &[Ray],
+    query: Query,
+    pass: Pass,
+) -> (Vec<Option<Hit>>, Counters) {
     counted_chunks(rays, |rays, out, c| {
-        answer_chunk(s, rays, query, out, Some(c))
+        answer_chunk(s, rays, query, pass, out, Some(c))
     })
 }
 
 /// Traces every ray without counters and returns the number of hits (so the work cannot be
 /// optimized away): the timed pass, in parallel chunks over the current rayon pool.
 pub fn trace_timed(s: &dyn DynAccel<Triangle>, rays: &[Ray], query: Query) -> usize {
+    trace_timed_as(s, rays, query, Pass::Single)
+}
+
+/// [`trace_timed`], handing the rays over as `pass` says.
+pub fn trace_timed_as(s: &dyn DynAccel<Triangle>, rays: &[Ray], query: Query, pass: Pass) -> usize {
     rays.par_chunks(CHUNK)
         .map(|rays| {
             let mut out = [None; CHUNK];
             let out = &mut out[..rays.len()];
-            answer_chunk(s, rays, query, out, None);
+            answer_chunk(s, rays, query, pass, out, None);
             out.iter().filter(|h| h.is_some()).count()
         })
         .sum()

@@ -12,7 +12,7 @@ use rt_scene::save::{PlyEncoding, glb_bytes, gltf_embedded, ply_bytes};
 use rt_shootout::fuzz;
 use std::path::{Path, PathBuf};
 
-const TARGETS: [&str; 4] = ["load_obj", "load_ply", "load_gltf", "trace"];
+const TARGETS: [&str; 5] = ["load_obj", "load_ply", "load_gltf", "trace", "bundle"];
 
 fn fuzz_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz")
@@ -26,6 +26,11 @@ fn run(target: &str, what: &str, bytes: &[u8]) {
         "load_gltf" => fuzz::load(SceneFormat::Gltf, bytes),
         "trace" => {
             if let Err(e) = fuzz::trace(bytes) {
+                panic!("{what}: {e}");
+            }
+        }
+        "bundle" => {
+            if let Err(e) = fuzz::bundle(bytes) {
                 panic!("{what}: {e}");
             }
         }
@@ -102,6 +107,13 @@ fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         assert_eq!(bytes[0] & 1, 0);
         out.push(("trace", format!("lattice-{seed}.bin"), bytes));
     }
+    // The bundle target reads the trace target's cases.
+    let bundle: Vec<_> = out
+        .iter()
+        .filter(|(target, ..)| *target == "trace")
+        .map(|(_, name, bytes)| ("bundle", name.clone(), bytes.clone()))
+        .collect();
+    out.extend(bundle);
     out
 }
 

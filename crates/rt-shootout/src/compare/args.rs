@@ -69,6 +69,13 @@ pub struct Args {
     /// Image height for primary and shadow rays.
     #[arg(long, default_value_t = 768)]
     pub height: u32,
+    /// Also trace every row's rays as bundles (`Accel::intersect_bundle`, `occluded_bundle`):
+    /// primary rays in tiles of WxH pixels (8x8 fills a 64-lane bundle), shadow rays in the same
+    /// order, incoherent rays and rays from a file as they come. Every row's single rays then
+    /// follow that order too, and a table sets the bundles' speed, steps and lane use beside
+    /// them; every bundle answer must equal the row's single answer bit for bit.
+    #[arg(long, value_name = "WxH", value_parser = crate::cli::tile)]
+    pub bundle: Option<(u32, u32)>,
     /// Comma-separated rows to run (listed below); brute force is always the baseline.
     /// [default: every row]
     #[arg(short, long, value_delimiter = ',')]

@@ -2,7 +2,7 @@
 
 use super::Args;
 use super::points;
-use crate::data::{Report, Row, three_digits};
+use crate::data::{BundleRow, Report, Row, three_digits};
 use rt_core::Hit;
 use std::fmt::Write as _;
 
@@ -153,6 +153,47 @@ pub(super) fn to_table(r: &Report) -> String {
             );
         }
     }
+    let bundled: Vec<(&Row, &BundleRow)> = r
+        .rows
+        .iter()
+        .filter_map(|row| row.bundle.as_ref().map(|b| (row, b)))
+        .collect();
+    if !bundled.is_empty() {
+        let _ = writeln!(
+            s,
+            "\nBundles: the same rays traced as bundles; speed, and its ratio to the row's single \
+             rays measured in the same run; nodes or cells entered per ray (a bundle's step counts \
+             once), tests per ray, the share of lanes active at a bundle's steps, the share of rays \
+             traced singly, and answers that differ from the single ones in any bit"
+        );
+        let _ = writeln!(
+            s,
+            "{:<w$} {:>11} {:>9} {:>10} {:>10} {:>9} {:>7} {:>11}",
+            "structure",
+            "Mrays/s",
+            "x single",
+            "visits/ray",
+            "tests/ray",
+            "lane use",
+            "alone",
+            "differences"
+        );
+        for (row, b) in bundled {
+            let _ = writeln!(
+                s,
+                "{:<w$} {:>11} {:>8.2}x {:>10} {:>10} {:>9} {:>6.1}% {:>11}",
+                row.name,
+                three_digits(b.mrays_per_s),
+                b.over_single,
+                three_digits(b.avg_visits),
+                three_digits(b.avg_prim_tests),
+                b.lane_utilisation
+                    .map_or("-".to_string(), |u| format!("{:.0}%", 100.0 * u)),
+                100.0 * b.single_share,
+                b.differences
+            );
+        }
+    }
     if r.rows.len() > 1 && r.total_mismatches() == 0 {
         let _ = writeln!(s, "all answers agree");
     }
@@ -202,6 +243,17 @@ pub(super) fn to_json(r: &Report) -> String {
                 "predicted_visits": row.predicted.map(|p| p.visits),
                 "predicted_tests": row.predicted.map(|p| p.tests),
             });
+            if let Some(b) = &row.bundle {
+                v["bundle"] = serde_json::json!({
+                    "mrays_per_s": b.mrays_per_s,
+                    "over_single": b.over_single,
+                    "avg_visits": b.avg_visits,
+                    "avg_prim_tests": b.avg_prim_tests,
+                    "lane_utilisation": b.lane_utilisation,
+                    "single_share": b.single_share,
+                    "differences": b.differences,
+                });
+            }
             if r.per_ray_answers {
                 v["ray_hits"] = row.answers.iter().map(|&h| hit_json(h, any)).collect();
             }

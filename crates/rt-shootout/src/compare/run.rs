@@ -3,9 +3,9 @@
 
 use super::output::{describe_disagreements, to_json, to_table};
 use super::{Args, QueryKind, RayKind, points};
-use crate::data::{Disagreement, Report, Row, predicted_per_ray};
+use crate::data::{BundleRow, Disagreement, Report, Row, predicted_per_ray};
 use crate::scene::load_scene;
-use crate::structures::{self, Query};
+use crate::structures::{self, Pass, Query};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rt_bvh::Bvh;
 use rt_core::DynAccel;
@@ -181,6 +181,7 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
             &rays,
             query,
             args.repeats,
+            args.bundle.is_some(),
         );
         row.predicted = predicted_per_ray(s.as_ref(), &rays, &bounds);
         rows.push(row);
@@ -202,6 +203,7 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
         &subset_rays,
         query,
         0,
+        false,
     );
     progress.done();
 
@@ -432,11 +434,16 @@ fn make_rays(args: &Args, source: &Source) -> Result<(Vec<Ray>, &'static str, Qu
         RayKind::Incoherent => raygen::RayKind::Incoherent,
         RayKind::Shadow => raygen::RayKind::Shadow,
     };
+    // With `--bundle`, in tiles, so that neighbouring rays come side by side.
+    let primary = || match args.bundle {
+        Some(tile) => camera.tiled_rays(args.width, args.height, tile).0,
+        None => camera.primary_rays(args.width, args.height),
+    };
     // Shadow rays start at the primary hits, found by a SAH BVH (any correct structure finds
     // the same ones); they need only the triangles hit, in the world.
     let rays = match shared_kind {
         raygen::RayKind::Shadow => {
-            let primary = camera.primary_rays(args.width, args.height);
+            let primary = primary();
             let entry = structures::entries_of::<Bvh<Triangle>, Bvh<rt_core::Shape>>()
                 .into_iter()
                 .find(|e| e.name == "bvh-binary")
@@ -457,7 +464,7 @@ fn make_rays(args: &Args, source: &Source) -> Result<(Vec<Ray>, &'static str, Qu
                 .collect();
             raygen::shadow_rays(&primary, &hits, &hit_tris, raygen::default_light(bounds))
         }
-        raygen::RayKind::Primary => camera.primary_rays(args.width, args.height),
+        raygen::RayKind::Primary => primary(),
         raygen::RayKind::Incoherent => raygen::incoherent_rays(
             bounds,
             args.width as usize * args.height as usize,
@@ -467,6 +474,9 @@ fn make_rays(args: &Args, source: &Source) -> Result<(Vec<Ray>, &'static str, Qu
     Ok((rays, shared_kind.name(), query))
 }
 
+/// A row's counted pass and its best timed pass over `repeats`; with `bundles`, the same for
+/// the bundle queries, each bundle pass timed right after a single one, and every bundle answer
+/// compared with the single answer bit for bit.
 fn trace_row(
     name: &str,
     s: &dyn DynAccel<Triangle>,
@@ -474,22 +484,64 @@ fn trace_row(
     rays: &[Ray],
     query: Query,
     repeats: u32,
+    bundles: bool,
 ) -> Row {
     let t = Instant::now();
     let (answers, counters) = structures::trace_counted(s, rays, query);
     let mut best = t.elapsed();
     let mut hits = answers.iter().filter(|a| a.is_some()).count();
+    let bundled = bundles.then(|| {
+        let t = Instant::now();
+        let (got, counters) = structures::trace_counted_as(s, rays, query, Pass::Bundles);
+        (got, counters, t.elapsed())
+    });
+    let mut best_bundle = bundled.as_ref().map(|b| b.2);
     if repeats > 0 {
         best = Duration::MAX;
+        best_bundle = best_bundle.map(|_| Duration::MAX);
     }
     for _ in 0..repeats {
         let t = Instant::now();
         hits = structures::trace_timed(s, rays, query);
         best = best.min(t.elapsed());
+        if let Some(b) = &mut best_bundle {
+            let t = Instant::now();
+            std::hint::black_box(structures::trace_timed_as(s, rays, query, Pass::Bundles));
+            *b = (*b).min(t.elapsed());
+        }
     }
     let mut row = Row::measured(name, s, build_ms, rays.len(), hits, counters, best);
+    if let (Some((got, c, _)), Some(time)) = (bundled, best_bundle) {
+        let n = rays.len().max(1) as f64;
+        let mrays_per_s = rays.len() as f64 / time.as_secs_f64().max(1e-9) / 1e6;
+        row.bundle = Some(BundleRow {
+            mrays_per_s,
+            over_single: mrays_per_s / row.mrays_per_s,
+            avg_visits: c.node_visits as f64 / n,
+            avg_prim_tests: c.prim_tests as f64 / n,
+            lane_utilisation: c.lane_utilisation(),
+            single_share: c.single_rays as f64 / n,
+            differences: got
+                .iter()
+                .zip(&answers)
+                .filter(|(a, b)| !same_answer(**a, **b))
+                .count(),
+        });
+    }
     row.answers = answers;
     row
+}
+
+/// Whether two answers are the same bits (an any-hit answer's `t` is a NaN marker: its
+/// presence is the answer).
+fn same_answer(a: Option<Hit>, b: Option<Hit>) -> bool {
+    let bits = |h: Option<Hit>| {
+        h.map(|h| {
+            let f = |x: f32| if x.is_nan() { u32::MAX } else { x.to_bits() };
+            (h.prim, f(h.t), f(h.u), f(h.v))
+        })
+    };
+    bits(a) == bits(b)
 }
 
 impl Row {
@@ -528,6 +580,7 @@ impl Row {
             speedup: 0.0,
             predicted: None,
             answers: Vec::new(),
+            bundle: None,
         }
     }
 }
@@ -728,6 +781,102 @@ mod tests {
             "rays outside the subset were settled by brute force"
         );
         assert!(!report.disagreements.is_empty());
+    }
+
+    /// A structure whose single queries are right (the wide tree's) but whose bundle queries
+    /// lose every hit on an even primitive.
+    #[derive(Debug)]
+    struct BundlesLoseEvenHits<P: rt_core::Primitive>(Bvh<P>);
+
+    impl<P: rt_core::Primitive> Accel for BundlesLoseEvenHits<P> {
+        type Prim = P;
+        type Params = ();
+        const NAME: &'static str = "bundles-broken";
+        fn presets() -> Vec<(&'static str, ())> {
+            vec![("default", ())]
+        }
+        fn build(prims: &[P], _: &()) -> Self {
+            Self(Bvh::build(prims, &BvhParams::wide()))
+        }
+        fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+            self.0.intersect_with(ray, stats)
+        }
+        fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+            self.0.occluded_with(ray, stats)
+        }
+        fn intersect_bundle_with<S: Stats>(
+            &self,
+            rays: &[Ray],
+            out: &mut [Option<Hit>],
+            stats: &mut S,
+        ) {
+            self.0.intersect_bundle_with(rays, out, stats);
+            for o in out.iter_mut() {
+                *o = o.filter(|h| h.prim % 2 == 1);
+            }
+        }
+        fn bounds(&self) -> Aabb {
+            self.0.bounds()
+        }
+        fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+            self.0.ball_query(query, stats);
+        }
+        fn memory_bytes(&self) -> usize {
+            self.0.memory_bytes()
+        }
+        fn build_stats(&self) -> BuildStats {
+            self.0.build_stats()
+        }
+    }
+
+    #[test]
+    fn bundles_are_checked_bit_for_bit_against_the_single_rays() {
+        let a = args(&[
+            "--scene",
+            "teapot:1000",
+            "--width",
+            "64",
+            "--height",
+            "48",
+            "--repeats",
+            "1",
+            "--bundle",
+            "8x8",
+        ]);
+        let mut entries: Vec<_> = structures::all()
+            .into_iter()
+            .filter(|e| e.name == "bvh" || e.name == "kdtree")
+            .collect();
+        entries.push(structures::entry_of::<
+            BundlesLoseEvenHits<Triangle>,
+            BundlesLoseEvenHits<rt_core::Shape>,
+        >());
+        let report = measure(&a, 1, entries).unwrap();
+        let row = |name: &str| report.rows.iter().find(|r| r.name == name).unwrap();
+        let (bvh, kdtree, broken) = (row("bvh"), row("kdtree"), row("bundles-broken"));
+        let even = bvh
+            .answers
+            .iter()
+            .filter(|a| a.is_some_and(|h| h.prim % 2 == 0))
+            .count();
+        assert!(even > 100, "the view must exercise the broken path");
+        // Its single answers agree with brute force; its bundle answers are caught.
+        assert_eq!(broken.mismatches, 0);
+        assert_eq!(broken.bundle.as_ref().unwrap().differences, even);
+        assert_eq!(report.total_mismatches(), even);
+        // The wide tree traces bundles (its lanes counted); the kd-tree, without a bundle
+        // traversal, traces every ray alone.
+        let b = bvh.bundle.as_ref().unwrap();
+        assert_eq!(b.differences, 0);
+        assert!(b.lane_utilisation.is_some_and(|u| u > 0.0 && u <= 1.0));
+        assert!(b.avg_visits < bvh.avg_visits, "a bundle's step counts once");
+        let k = kdtree.bundle.as_ref().unwrap();
+        assert_eq!((k.single_share, k.lane_utilisation), (1.0, None));
+        let table = to_table(&report);
+        assert!(
+            table.contains("\nBundles: the same rays traced as bundles"),
+            "{table}"
+        );
     }
 
     #[test]

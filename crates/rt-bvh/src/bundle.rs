@@ -1,0 +1,237 @@
+//! Bundle traversal of the wide tree: up to 64 rays of one direction octant walk the tree
+//! together ([`rt_core::bundle`]).
+//!
+//! The technique is the interval-culled packet traversal of Wald, Boulos & Shirley (2007, "Ray
+//! tracing deformable scenes using dynamic bounding volume hierarchies") on an 8-wide tree, with
+//! per-lane masks as in Overbeck et al. (2008, "Large ray packets for real-time Whitted ray
+//! tracing") rather than a first-active index:
+//! - at a node, one vector test bounds the whole bundle against all eight children
+//!   ([`interval8`]: interval arithmetic over the lanes' origins and reciprocal directions), and
+//!   culls the children no lane can enter;
+//! - each child left is tested against the active lanes, eight lanes per vector, with each lane's
+//!   own slab arithmetic (the single ray's [`slab8`](crate::kernels::slab8), lane by lane), giving
+//!   the exact mask of lanes that enter it;
+//! - children are visited nearest first by their interval entry bound, pushed with their lane
+//!   masks; a leaf tests its items against each lane of its mask with the single ray's leaf test.
+//!
+//! So every lane tests a superset of the primitives its single ray tests (the interval test is
+//! conservative, see [`rt_core::Bundle::may_enter`], and the lane tests are the single ray's),
+//! each with the single ray's arithmetic, and keeps the best by the same tie rule: its answer is
+//! the single ray's, bit for bit.
+
+use crate::kernels::{BoxRay, RayData, Simd};
+use crate::node::{ChildRef, WIDTH, WideNode};
+use crate::simd::Stack;
+use crate::traverse::{Leaves, WIDE_STACK};
+use rt_core::bundle::Bundle;
+use rt_core::{BUNDLE_LANES, Hit, SLAB_FAR_SCALE, Shear, Stats};
+
+/// Vectors of eight lanes in a bundle of [`BUNDLE_LANES`].
+const GROUPS: usize = BUNDLE_LANES / 8;
+
+/// Each lane's best hit so far, and its `t` in an array of its own for the vector slab tests.
+pub(crate) struct Answers {
+    pub best: [Hit; BUNDLE_LANES],
+    pub t: [f32; BUNDLE_LANES],
+    /// Lanes still tracing: an any-hit lane leaves at its first hit.
+    pub alive: u64,
+}
+
+impl Answers {
+    pub fn new(b: &Bundle) -> Self {
+        let mut best = [Hit {
+            prim: u32::MAX,
+            t: 0.0,
+            u: 0.0,
+            v: 0.0,
+        }; BUNDLE_LANES];
+        for (h, &t) in best.iter_mut().zip(&b.t_max) {
+            h.t = t;
+        }
+        Self {
+            best,
+            t: b.t_max,
+            alive: b.all_lanes(),
+        }
+    }
+
+    /// The largest best `t` of the live lanes: no lane can use a box entered beyond it.
+    fn t_hi(&self) -> f32 {
+        let mut hi = f32::NEG_INFINITY;
+        let mut m = self.alive;
+        while m != 0 {
+            let i = m.trailing_zeros() as usize;
+            m &= m - 1;
+            hi = hi.max(self.t[i]);
+        }
+        hi
+    }
+}
+
+/// The interval test of all eight children against the bundle: a bit mask of the children some
+/// lane may enter, and a lower bound of every lane's entry distance into each. Lane by lane of
+/// the children, this is [`Bundle::may_enter`] (the same operations; see there why it is
+/// conservative).
+#[inline(always)]
+fn interval8<X: Simd>(s: X, node: &WideNode, b: &Bundle, t_hi: f32) -> (u32, [f32; WIDTH]) {
+    let lb = b.lane_bounds();
+    let mut t0 = s.splat8(lb.t_min_lo);
+    let mut t1 = s.splat8(t_hi);
+    for a in 0..3 {
+        let negative = b.octant() >> a & 1 != 0;
+        let (near, far) = if negative { (a + 3, a) } else { (a, a + 3) };
+        let (lo, hi) = (s.splat8(lb.inv_dir_lo[a]), s.splat8(lb.inv_dir_hi[a]));
+        let (o_lo, o_hi) = (s.splat8(lb.origin_lo[a]), s.splat8(lb.origin_hi[a]));
+        let near = s.load8(&node.bounds[near]);
+        let far = s.load8(&node.bounds[far]);
+        let (n0, n1) = (s.sub8(near, o_hi), s.sub8(near, o_lo));
+        let near_lo = s.min8(
+            s.min8(s.mul8(n0, lo), s.mul8(n0, hi)),
+            s.min8(s.mul8(n1, lo), s.mul8(n1, hi)),
+        );
+        let (f0, f1) = (s.sub8(far, o_hi), s.sub8(far, o_lo));
+        let far_hi = s.max8(
+            s.max8(s.mul8(f0, lo), s.mul8(f0, hi)),
+            s.max8(s.mul8(f1, lo), s.mul8(f1, hi)),
+        );
+        t0 = s.max8(near_lo, t0);
+        t1 = s.min8(far_hi, t1);
+    }
+    let mask = s.le_bits8(t0, s.mul8(t1, s.splat8(SLAB_FAR_SCALE)));
+    (mask, s.store8(t0))
+}
+
+/// For each child in `children`, the lanes of `active` that enter it: each lane's own slab test
+/// against its own best `t`, eight lanes per vector, the operations of
+/// [`slab8`](crate::kernels::slab8) in the same order.
+#[inline(always)]
+fn lanes_entering<X: Simd>(
+    s: X,
+    node: &WideNode,
+    children: u32,
+    b: &Bundle,
+    answers: &Answers,
+    active: u64,
+) -> [u64; WIDTH] {
+    let mut lanes = [0u64; WIDTH];
+    let octant = b.octant();
+    let rows = |a: usize| {
+        let negative = octant >> a & 1 != 0;
+        if negative { (a + 3, a) } else { (a, a + 3) }
+    };
+    let rows = [rows(0), rows(1), rows(2)];
+    for g in 0..GROUPS {
+        let group = (active >> (8 * g)) as u8;
+        if group == 0 {
+            continue;
+        }
+        let at = |v: &[f32; BUNDLE_LANES]| s.load8(&v.as_chunks::<8>().0[g]);
+        let o = [at(&b.origin[0]), at(&b.origin[1]), at(&b.origin[2])];
+        let inv = [at(&b.inv_dir[0]), at(&b.inv_dir[1]), at(&b.inv_dir[2])];
+        let (t_min, t_max) = (at(&b.t_min), at(&answers.t));
+        let mut m = children;
+        while m != 0 {
+            let c = m.trailing_zeros() as usize;
+            m &= m - 1;
+            let mut t0 = t_min;
+            let mut t1 = t_max;
+            for a in 0..3 {
+                let (near, far) = rows[a];
+                let tn = s.mul8(s.sub8(s.splat8(node.bounds[near][c]), o[a]), inv[a]);
+                let tf = s.mul8(s.sub8(s.splat8(node.bounds[far][c]), o[a]), inv[a]);
+                t0 = s.max8(tn, t0);
+                t1 = s.min8(tf, t1);
+            }
+            let hit = s.le_bits8(t0, s.mul8(t1, s.splat8(SLAB_FAR_SCALE))) & group as u32;
+            lanes[c] |= (hit as u64) << (8 * g);
+        }
+    }
+    lanes
+}
+
+/// The bundle traversal core, shared by closest hit (`ANY = false`) and any hit (`ANY = true`):
+/// fills `answers` for the lanes of `b`.
+#[inline(always)]
+pub(crate) fn wide_bundle<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
+    simd: X,
+    nodes: &[WideNode],
+    leaves: &L,
+    b: &Bundle,
+    answers: &mut Answers,
+    stats: &mut S,
+) {
+    let mut stack = Stack::<(u32, u64, f32), WIDE_STACK>::new();
+    let (mut current, mut active) = (ChildRef::node(0), b.all_lanes());
+    let mut t_hi = answers.t_hi();
+    let mut shears = [None; BUNDLE_LANES];
+    loop {
+        stats.node_visit();
+        stats.bundle_lanes(b.len() as u32, active.count_ones());
+        if !current.is_leaf() {
+            let node = &nodes[current.index()];
+            let (children, t_entry) = interval8(simd, node, b, t_hi);
+            let lanes = if children != 0 {
+                lanes_entering(simd, node, children, b, answers, active)
+            } else {
+                [0; WIDTH]
+            };
+            // The children some lane enters, farthest first, by their entry bound (any hit: in
+            // lane order).
+            let mut order = [(0u32, 0u64, 0.0f32); WIDTH];
+            let mut n = 0;
+            let mut m = children;
+            while m != 0 {
+                let c = m.trailing_zeros() as usize;
+                m &= m - 1;
+                if lanes[c] == 0 {
+                    continue;
+                }
+                let e = (node.children[c], lanes[c], t_entry[c]);
+                let mut j = n;
+                while !ANY && j > 0 && order[j - 1].2 < e.2 {
+                    order[j] = order[j - 1];
+                    j -= 1;
+                }
+                order[j] = e;
+                n += 1;
+            }
+            if n > 0 {
+                for &e in &order[..n - 1] {
+                    stack.push(e);
+                }
+                (current, active) = (ChildRef(order[n - 1].0), order[n - 1].1);
+                continue;
+            }
+        } else {
+            let mut m = active & answers.alive;
+            while m != 0 {
+                let i = m.trailing_zeros() as usize;
+                m &= m - 1;
+                let ray = b.ray(i);
+                // PERF: each lane's shear (three divisions) is computed at its first leaf only.
+                let shear = *shears[i].get_or_insert_with(|| Shear::new(ray.dir()));
+                let r = RayData::with_shear(simd, &ray, BoxRay::new(simd, &ray), shear);
+                let best = &mut answers.best[i];
+                if leaves.test::<X, S, ANY>(simd, current.items(), &r, &ray, best, stats) {
+                    answers.alive &= !(1 << i);
+                }
+                answers.t[i] = best.t;
+            }
+            if ANY && answers.alive == 0 {
+                return;
+            }
+            t_hi = answers.t_hi();
+        }
+        // Pop the next subtree that some live lane may still need.
+        loop {
+            let Some((child, lanes, t)) = stack.pop() else {
+                return;
+            };
+            let lanes = lanes & answers.alive;
+            if lanes != 0 && (ANY || t <= t_hi * SLAB_FAR_SCALE) {
+                (current, active) = (ChildRef(child), lanes);
+                break;
+            }
+        }
+    }
+}

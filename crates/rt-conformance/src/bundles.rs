@@ -1,0 +1,188 @@
+//! The bundle check: a structure's bundle queries ([`Accel::intersect_bundle_with`],
+//! [`Accel::occluded_bundle_with`]) must answer every ray exactly as its single-ray queries do,
+//! whatever bundles the rays come in.
+
+use crate::Probe;
+use rt_core::{Accel, Counters, Hit, NoStats, Ray, Rng};
+
+/// The slice lengths the kit hands to the bundle queries: one ray, just under, at and over the
+/// common bundle widths (8 and 64 lanes), and a long slice.
+pub const BUNDLE_SIZES: [usize; 8] = [1, 7, 8, 9, 63, 64, 65, 1000];
+
+/// The orders the kit re-bundles rays in, each with its name for messages: as given; shuffled;
+/// the direction octants interleaved (each run of rays mixes all octants present); and invalid
+/// rays (a NaN origin, a zero direction, an empty interval) interleaved with the given ones.
+pub fn bundle_orders(rays: &[Ray], seed: u64) -> Vec<(&'static str, Vec<Ray>)> {
+    let mut rng = Rng::new(seed);
+    let mut shuffled = rays.to_vec();
+    for i in (1..shuffled.len()).rev() {
+        shuffled.swap(i, rng.below(i as u32 + 1) as usize);
+    }
+    // Round robin over the octants: ray k of octant 0, of octant 1, ..., then ray k + 1.
+    let mut by_octant: [Vec<Ray>; 8] = Default::default();
+    for r in rays {
+        by_octant[rt_core::bundle::octant(r)].push(*r);
+    }
+    let longest = by_octant.iter().map(Vec::len).max().unwrap_or(0);
+    let mixed = (0..longest)
+        .flat_map(|k| by_octant.iter().filter_map(move |o| o.get(k).copied()))
+        .collect();
+    let invalid = [
+        Ray::new(rt_core::glam::Vec3::NAN, rt_core::glam::Vec3::X),
+        Ray::new(rt_core::glam::Vec3::ZERO, rt_core::glam::Vec3::ZERO),
+        Ray::with_interval(rt_core::glam::Vec3::ZERO, rt_core::glam::Vec3::Z, 2.0, 1.0),
+    ];
+    let mut with_invalid = Vec::with_capacity(rays.len() + rays.len() / 5 + 1);
+    for (i, r) in rays.iter().enumerate() {
+        if i % 5 == 2 {
+            with_invalid.push(invalid[i / 5 % invalid.len()]);
+        }
+        with_invalid.push(*r);
+    }
+    vec![
+        ("as given", rays.to_vec()),
+        ("shuffled", shuffled),
+        ("with octants mixed", mixed),
+        ("with invalid rays interleaved", with_invalid),
+    ]
+}
+
+/// Whether two closest-hit answers are the same bits: the same primitive and the same `t`, `u`,
+/// `v` (as `f32` bits, so `-0.0` and `0.0` differ).
+pub fn same_bits(a: Option<Hit>, b: Option<Hit>) -> bool {
+    let bits = |h: Option<Hit>| h.map(|h| (h.prim, h.t.to_bits(), h.u.to_bits(), h.v.to_bits()));
+    bits(a) == bits(b)
+}
+
+/// Checks that `accel`'s bundle queries answer every ray of `rays`, in every order of
+/// [`bundle_orders`] and every slice length of [`BUNDLE_SIZES`], exactly as its single-ray
+/// queries do (the same bits, [`same_bits`]); that counting events changes no answer; and that
+/// slices of unequal lengths answer as many rays as both have and leave the rest alone. With
+/// `any` false, only the closest-hit queries are checked.
+///
+/// # Errors
+/// The first answer that differs, with its ray, the order and the slice length.
+pub fn compare_bundles<A: Accel>(accel: &A, rays: &[Ray], any: bool) -> Result<(), String> {
+    compare_bundles_probed(accel, rays, any, &Probe::default())
+}
+
+pub(crate) fn compare_bundles_probed<A: Accel>(
+    accel: &A,
+    rays: &[Ray],
+    any: bool,
+    probe: &Probe,
+) -> Result<(), String> {
+    let name = A::NAME;
+    for (order, rays) in bundle_orders(rays, 0x5eed_b0d1) {
+        let single: Vec<Option<Hit>> = rays.iter().map(|r| accel.intersect(r)).collect();
+        let blocked: Vec<bool> = if any {
+            rays.iter().map(|r| accel.occluded(r)).collect()
+        } else {
+            Vec::new()
+        };
+        for size in BUNDLE_SIZES {
+            let mut hits = vec![None; rays.len()];
+            let mut occluded = vec![false; rays.len()];
+            for (k, chunk) in rays.chunks(size).enumerate() {
+                probe.bundle(&chunk[0], chunk.len());
+                let range = k * size..k * size + chunk.len();
+                accel.intersect_bundle_with(chunk, &mut hits[range.clone()], &mut NoStats);
+                if any {
+                    accel.occluded_bundle_with(chunk, &mut occluded[range], &mut NoStats);
+                }
+            }
+            let at = |i: usize| {
+                format!(
+                    "in bundles of {size} (rays {order}), slot {i}, for ray {}\n  rays-file line: {}",
+                    rays[i].to_rust(),
+                    rays[i].to_line()
+                )
+            };
+            if let Some(i) = (0..rays.len()).find(|&i| !same_bits(hits[i], single[i])) {
+                return Err(format!(
+                    "{name}: intersect_bundle gives {:?} where intersect gives {:?} {}",
+                    hits[i],
+                    single[i],
+                    at(i)
+                ));
+            }
+            if let Some(i) = (0..blocked.len()).find(|&i| occluded[i] != blocked[i]) {
+                return Err(format!(
+                    "{name}: occluded_bundle gives {} where occluded gives {} {}",
+                    occluded[i],
+                    blocked[i],
+                    at(i)
+                ));
+            }
+        }
+    }
+    counted_and_uneven(accel, rays, any, probe)
+}
+
+/// Counting changes no answer, and unequal slices answer as many rays as both have.
+fn counted_and_uneven<A: Accel>(
+    accel: &A,
+    rays: &[Ray],
+    any: bool,
+    probe: &Probe,
+) -> Result<(), String> {
+    let name = A::NAME;
+    let Some(first) = rays.first() else {
+        return Ok(());
+    };
+    probe.bundle(first, rays.len());
+    let single: Vec<Option<Hit>> = rays.iter().map(|r| accel.intersect(r)).collect();
+    let mut counted = vec![None; rays.len()];
+    let mut counters = Counters::default();
+    accel.intersect_bundle_with(rays, &mut counted, &mut counters);
+    if let Some(i) = (0..rays.len()).find(|&i| !same_bits(counted[i], single[i])) {
+        return Err(format!(
+            "{name}: intersect_bundle_with(Counters) gives {:?} where intersect gives {:?}, for ray {}",
+            counted[i],
+            single[i],
+            rays[i].to_rust()
+        ));
+    }
+    // Three slots more than rays: the extra ones keep what they held.
+    let marker = Some(Hit {
+        prim: 7,
+        t: -1.0,
+        u: 0.0,
+        v: 0.0,
+    });
+    let mut longer = vec![marker; rays.len() + 3];
+    accel.intersect_bundle(rays, &mut longer);
+    if longer[rays.len()..].iter().any(|&h| !same_bits(h, marker))
+        || (0..rays.len()).any(|i| !same_bits(longer[i], single[i]))
+    {
+        return Err(format!(
+            "{name}: intersect_bundle with {} rays and {} answer slots must answer the rays and leave the other slots alone",
+            rays.len(),
+            longer.len()
+        ));
+    }
+    // Fewer slots than rays: the first rays are answered.
+    let mut shorter = vec![None; rays.len() / 2];
+    accel.intersect_bundle(rays, &mut shorter);
+    if (0..shorter.len()).any(|i| !same_bits(shorter[i], single[i])) {
+        return Err(format!(
+            "{name}: intersect_bundle with {} rays and {} answer slots must answer the first {} rays",
+            rays.len(),
+            shorter.len(),
+            shorter.len()
+        ));
+    }
+    if any {
+        let blocked: Vec<bool> = rays.iter().map(|r| accel.occluded(r)).collect();
+        let mut got = vec![true; rays.len() + 3];
+        accel.occluded_bundle_with(rays, &mut got, &mut counters);
+        if got[..rays.len()] != blocked[..] || got[rays.len()..].iter().any(|&b| !b) {
+            return Err(format!(
+                "{name}: occluded_bundle_with(Counters) with {} rays and {} slots must answer as occluded does and leave the other slots alone",
+                rays.len(),
+                got.len()
+            ));
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,438 @@
+//! Ray bundles: many rays traced in one call, and what every structure's bundle traversal needs.
+//!
+//! [`Accel::intersect_bundle`] and
+//! [`Accel::occluded_bundle`] answer a slice of rays into a slice
+//! of answers. Their default loops over the single-ray queries, so every structure (a student's
+//! too) answers them; a structure that traces coherent rays together overrides them, and must
+//! answer every ray exactly as its single-ray query does (the conformance kit checks it).
+//!
+//! A structure's own traversal takes its rays as [`Bundle`]s, made by [`for_each_bundle`]: up
+//! to [`BUNDLE_LANES`] valid rays of one direction octant, in structure-of-arrays form, with
+//! bounds over the lanes ([`Bundle::may_enter`]) that cull a box for all of them in one test.
+//! Rays a bundle cannot carry (invalid rays, and rays with a zero or tiny direction component,
+//! whose reciprocal is infinite) are handed back one by one, to be answered by the single-ray
+//! query, which answers invalid rays at once, as it always does.
+//!
+//! [`intersect_frame`] and [`occluded_frame`] trace a whole ray list in tiles on rayon's threads
+//! (with the `parallel` feature; in order on the calling thread without it).
+//!
+//! # Counting
+//! A bundle's walk reports one [`Stats::node_visit`] per node (or cell)
+//! the bundle enters, whatever the number of its lanes, and with it
+//! [`Stats::bundle_lanes`]: how many lanes the bundle carries and how
+//! many of them are active there. Node visits per ray then show what a bundle saves, and
+//! [`Counters::lane_utilisation`](crate::Counters::lane_utilisation) how full its steps were.
+//! Primitive tests count once per lane and primitive, as single rays count them. A ray a bundle
+//! finishes alone (see [`Stats::single_ray`]) counts as a single ray.
+
+use crate::{Aabb, Accel, Hit, NoStats, Ray, SLAB_FAR_SCALE, Stats};
+use glam::Vec3;
+
+/// The most rays one [`Bundle`] carries: a bit per lane in a `u64` mask.
+pub const BUNDLE_LANES: usize = 64;
+
+/// Up to [`BUNDLE_LANES`] valid rays whose direction components have the same signs (one
+/// octant) and finite, non-zero reciprocals, in structure-of-arrays form.
+///
+/// Lane `i` is the ray `rays[slot[i]]` of the slice it was made from; its origin, direction,
+/// reciprocal direction and interval are the ray's own values, bit for bit, so a structure's
+/// lane-by-lane tests compute exactly what its single-ray tests compute for that ray.
+#[derive(Clone, Debug)]
+pub struct Bundle {
+    len: usize,
+    /// For each lane, the index of its ray in the slice the bundle was made from.
+    pub slot: [u32; BUNDLE_LANES],
+    /// Origins, per axis.
+    pub origin: [[f32; BUNDLE_LANES]; 3],
+    /// Directions, per axis.
+    pub dir: [[f32; BUNDLE_LANES]; 3],
+    /// Reciprocal directions, per axis ([`Ray::inv_dir`]).
+    pub inv_dir: [[f32; BUNDLE_LANES]; 3],
+    /// `t_min` of each lane.
+    pub t_min: [f32; BUNDLE_LANES],
+    /// `t_max` of each lane.
+    pub t_max: [f32; BUNDLE_LANES],
+    octant: usize,
+    origin_lo: Vec3,
+    origin_hi: Vec3,
+    inv_lo: Vec3,
+    inv_hi: Vec3,
+    t_min_lo: f32,
+}
+
+impl Bundle {
+    fn empty(octant: usize) -> Self {
+        Self {
+            len: 0,
+            slot: [0; BUNDLE_LANES],
+            origin: [[0.0; BUNDLE_LANES]; 3],
+            dir: [[0.0; BUNDLE_LANES]; 3],
+            inv_dir: [[0.0; BUNDLE_LANES]; 3],
+            t_min: [0.0; BUNDLE_LANES],
+            t_max: [0.0; BUNDLE_LANES],
+            octant,
+            origin_lo: Vec3::INFINITY,
+            origin_hi: Vec3::NEG_INFINITY,
+            inv_lo: Vec3::INFINITY,
+            inv_hi: Vec3::NEG_INFINITY,
+            t_min_lo: f32::INFINITY,
+        }
+    }
+
+    fn push(&mut self, slot: u32, ray: &Ray) {
+        let i = self.len;
+        self.slot[i] = slot;
+        let (o, d, inv) = (ray.origin, ray.dir(), ray.inv_dir());
+        for a in 0..3 {
+            self.origin[a][i] = o[a];
+            self.dir[a][i] = d[a];
+            self.inv_dir[a][i] = inv[a];
+        }
+        self.t_min[i] = ray.t_min;
+        self.t_max[i] = ray.t_max;
+        self.origin_lo = self.origin_lo.min(o);
+        self.origin_hi = self.origin_hi.max(o);
+        self.inv_lo = self.inv_lo.min(inv);
+        self.inv_hi = self.inv_hi.max(inv);
+        self.t_min_lo = self.t_min_lo.min(ray.t_min);
+        self.len += 1;
+    }
+
+    /// How many lanes the bundle carries (1 to [`BUNDLE_LANES`]).
+    #[inline(always)]
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
+    /// Always false: [`for_each_bundle`] makes no empty bundle.
+    #[inline(always)]
+    pub fn is_empty(&self) -> bool {
+        self.len == 0
+    }
+
+    /// The mask of all lanes: bit `i` set for every lane `i < len`.
+    #[inline(always)]
+    pub fn all_lanes(&self) -> u64 {
+        if self.len == BUNDLE_LANES {
+            u64::MAX
+        } else {
+            (1 << self.len) - 1
+        }
+    }
+
+    /// The direction octant: bit `a` set when the lanes' direction along axis `a` is negative.
+    #[inline(always)]
+    pub fn octant(&self) -> usize {
+        self.octant
+    }
+
+    /// The bounds over the lanes that [`Bundle::may_enter`] uses, for a structure that runs the
+    /// same test in its own vectors (several boxes at once).
+    #[inline(always)]
+    pub fn lane_bounds(&self) -> LaneBounds {
+        LaneBounds {
+            origin_lo: self.origin_lo,
+            origin_hi: self.origin_hi,
+            inv_dir_lo: self.inv_lo,
+            inv_dir_hi: self.inv_hi,
+            t_min_lo: self.t_min_lo,
+        }
+    }
+
+    /// Lane `i` as a ray: the same bits as the ray it came from.
+    #[inline]
+    pub fn ray(&self, i: usize) -> Ray {
+        let v = |a: &[[f32; BUNDLE_LANES]; 3]| Vec3::new(a[0][i], a[1][i], a[2][i]);
+        Ray::with_interval(v(&self.origin), v(&self.dir), self.t_min[i], self.t_max[i])
+    }
+
+    /// Whether any lane may enter `bounds` within `[t_min, t_max_hi]`, where `t_max_hi` is at
+    /// least every lane's current `t_max` (its best hit so far). False only when no lane's
+    /// [`Aabb::intersect`] with its own `t_max` can succeed, so a box this rejects can be
+    /// skipped for the whole bundle.
+    ///
+    /// Why it is conservative: a lane's slab distance along an axis is `fl(fl(p - o)·r)` for the
+    /// plane `p`, its origin `o` and reciprocal `r`. `o` lies in `[origin_lo, origin_hi]` and `r`
+    /// in `[inv_lo, inv_hi]` (the same sign, finite and non-zero, so no product is NaN). Rounding
+    /// is monotone, so `fl(p - o)` lies between `fl(p - origin_hi)` and `fl(p - origin_lo)`, and
+    /// the exact product of two values in intervals lies between the smallest and the largest
+    /// product of the intervals' ends; rounding those ends bounds the lane's rounded product.
+    /// So the largest lower bound of the near distances (and `t_min`) is at most the lane's
+    /// entry, the smallest upper bound of the far distances (and `t_max_hi`) at least its exit,
+    /// and widening both by [`SLAB_FAR_SCALE`] keeps the order: if the bound's entry exceeds
+    /// the bound's widened exit, every lane's does.
+    #[inline(always)]
+    pub fn may_enter(&self, bounds: &Aabb, t_max_hi: f32) -> bool {
+        let mut t0 = self.t_min_lo;
+        let mut t1 = t_max_hi;
+        for a in 0..3 {
+            let negative = self.octant >> a & 1 != 0;
+            let (near, far) = if negative {
+                (bounds.max[a], bounds.min[a])
+            } else {
+                (bounds.min[a], bounds.max[a])
+            };
+            let (lo, hi) = (self.inv_lo[a], self.inv_hi[a]);
+            // The near distance's lower bound and the far distance's upper bound.
+            let (n0, n1) = (near - self.origin_hi[a], near - self.origin_lo[a]);
+            let near_lo = (n0 * lo).min(n0 * hi).min(n1 * lo).min(n1 * hi);
+            let (f0, f1) = (far - self.origin_hi[a], far - self.origin_lo[a]);
+            let far_hi = (f0 * lo).max(f0 * hi).max(f1 * lo).max(f1 * hi);
+            t0 = t0.max(near_lo);
+            t1 = t1.min(far_hi);
+        }
+        t0 <= t1 * SLAB_FAR_SCALE
+    }
+}
+
+/// The smallest and largest origin and reciprocal direction, per axis, and the smallest `t_min`
+/// over the lanes of a [`Bundle`] (see [`Bundle::may_enter`] for what they bound and why).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LaneBounds {
+    /// The smallest origin coordinate of any lane, per axis.
+    pub origin_lo: Vec3,
+    /// The largest origin coordinate of any lane, per axis.
+    pub origin_hi: Vec3,
+    /// The smallest reciprocal direction of any lane, per axis (all of one sign).
+    pub inv_dir_lo: Vec3,
+    /// The largest reciprocal direction of any lane, per axis.
+    pub inv_dir_hi: Vec3,
+    /// The smallest `t_min` of any lane.
+    pub t_min_lo: f32,
+}
+
+/// Whether a ray can travel in a bundle: valid, with every direction component non-zero and a
+/// finite reciprocal.
+#[inline]
+pub fn bundles_ray(ray: &Ray) -> bool {
+    ray.is_valid() && ray.inv_dir().is_finite() && ray.dir().cmpne(Vec3::ZERO).all()
+}
+
+/// The direction octant of a ray: bit `a` set when its direction along axis `a` is negative
+/// (`-0.0` counts as negative, as the slab tests read it).
+#[inline]
+pub fn octant(ray: &Ray) -> usize {
+    let d = ray.dir();
+    (d.x.is_sign_negative() as usize)
+        | (d.y.is_sign_negative() as usize) << 1
+        | (d.z.is_sign_negative() as usize) << 2
+}
+
+/// What [`for_each_bundle`] hands over: a bundle, or a ray that travels alone with its index in
+/// the slice.
+#[derive(Clone, Copy, Debug)]
+pub enum Group<'a> {
+    /// Rays that travel together.
+    Bundle(&'a Bundle),
+    /// A ray that cannot travel in a bundle ([`bundles_ray`]), and its index.
+    Single(usize, &'a Ray),
+}
+
+/// Splits `rays` into bundles: each run of [`BUNDLE_LANES`] consecutive rays gives up to eight
+/// bundles, one per direction octant present, each keeping the rays' order. Rays that cannot
+/// travel in a bundle ([`bundles_ray`]) come as [`Group::Single`] with their index instead.
+/// Every ray comes exactly once.
+///
+/// Rays given in tile order (a camera's 8×8 pixel tiles, a light's shadow rays) give full
+/// bundles; rays in random order give small ones, and a structure's bundle traversal may then
+/// trace them singly (it knows what pays).
+pub fn for_each_bundle(rays: &[Ray], mut visit: impl FnMut(Group<'_>)) {
+    let mut groups: [Option<Box<Bundle>>; 8] = Default::default();
+    for (base, run) in rays.chunks(BUNDLE_LANES).enumerate() {
+        for (k, ray) in run.iter().enumerate() {
+            let slot = base * BUNDLE_LANES + k;
+            if !bundles_ray(ray) {
+                visit(Group::Single(slot, ray));
+                continue;
+            }
+            let o = octant(ray);
+            let g = groups[o].get_or_insert_with(|| Box::new(Bundle::empty(o)));
+            g.push(slot as u32, ray);
+        }
+        for g in groups.iter_mut().flatten() {
+            if !g.is_empty() {
+                visit(Group::Bundle(g));
+                **g = Bundle::empty(g.octant);
+            }
+        }
+    }
+}
+
+/// The default bundle queries' loop: [`Accel::intersect_with`] for each ray into the same slot
+/// of `out` (as many as both have), each counted as a ray traced singly
+/// ([`Stats::single_ray`]).
+pub fn intersect_each<A: Accel, S: Stats>(
+    accel: &A,
+    rays: &[Ray],
+    out: &mut [Option<Hit>],
+    stats: &mut S,
+) {
+    for (o, r) in out.iter_mut().zip(rays) {
+        stats.single_ray();
+        *o = accel.intersect_with(r, stats);
+    }
+}
+
+/// The default bundle queries' loop: [`Accel::occluded_with`] for each ray into the same slot of
+/// `out` (as many as both have), each counted as a ray traced singly.
+pub fn occluded_each<A: Accel, S: Stats>(accel: &A, rays: &[Ray], out: &mut [bool], stats: &mut S) {
+    for (o, r) in out.iter_mut().zip(rays) {
+        stats.single_ray();
+        *o = accel.occluded_with(r, stats);
+    }
+}
+
+/// Rays per task of [`intersect_frame`] and [`occluded_frame`]: sixteen full bundles, enough to
+/// amortise a task's start, few enough to balance a frame over the threads.
+pub const FRAME_TASK: usize = 16 * BUNDLE_LANES;
+
+/// [`Accel::intersect_bundle`] over a whole ray list (a frame, a batch of queries), in tasks of
+/// [`FRAME_TASK`] rays on rayon's threads with the `parallel` feature. `out` gets as many answers
+/// as both slices have slots, each exactly the single-ray answer.
+///
+/// ```
+/// use rt_core::{Accel, BruteForce, Ray, Triangle, bundle, glam::Vec3};
+/// let tris = [Triangle::new(Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::Y)];
+/// let accel = BruteForce::build(&tris, &());
+/// let rays: Vec<Ray> = (0..1000)
+///     .map(|i| Ray::new(Vec3::new(i as f32 / 1000.0 - 0.5, 0.0, -1.0), Vec3::Z))
+///     .collect();
+/// let mut hits = vec![None; rays.len()];
+/// bundle::intersect_frame(&accel, &rays, &mut hits);
+/// assert!(hits.iter().all(|h| h.is_some_and(|h| h.prim == 0 && h.t == 1.0)));
+/// ```
+pub fn intersect_frame<A: Accel>(accel: &A, rays: &[Ray], out: &mut [Option<Hit>]) {
+    crate::par::zip_chunks_mut(rays, out, FRAME_TASK, |r, o| {
+        accel.intersect_bundle_with(r, o, &mut NoStats)
+    });
+}
+
+/// [`Accel::occluded_bundle`] over a whole ray list, as [`intersect_frame`] does.
+pub fn occluded_frame<A: Accel>(accel: &A, rays: &[Ray], out: &mut [bool]) {
+    crate::par::zip_chunks_mut(rays, out, FRAME_TASK, |r, o| {
+        accel.occluded_bundle_with(r, o, &mut NoStats)
+    });
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::Rng;
+
+    fn random_rays(seed: u64, n: usize) -> Vec<Ray> {
+        let mut rng = Rng::new(seed);
+        (0..n)
+            .map(|_| {
+                Ray::new(
+                    rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0)),
+                    rng.unit_vector(),
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn every_ray_goes_to_exactly_one_bundle_lane_or_to_single() {
+        let mut rays = random_rays(1, 300);
+        rays[5] = Ray::new(Vec3::ZERO, Vec3::X); // zero components: single
+        rays[77] = Ray::new(Vec3::NAN, Vec3::X); // invalid: single
+        let mut seen = vec![0; rays.len()];
+        for_each_bundle(&rays, |g| match g {
+            Group::Bundle(b) => {
+                assert!(!b.is_empty() && b.len() <= BUNDLE_LANES);
+                for i in 0..b.len() {
+                    let slot = b.slot[i] as usize;
+                    seen[slot] += 1;
+                    assert_eq!(octant(&rays[slot]), b.octant());
+                    assert_eq!(b.ray(i), rays[slot]);
+                    // Lanes keep the rays' order.
+                    assert!(i == 0 || b.slot[i - 1] < b.slot[i]);
+                }
+            }
+            Group::Single(slot, ray) => {
+                assert!(!bundles_ray(ray));
+                seen[slot] += 1;
+            }
+        });
+        assert!(seen.iter().all(|&c| c == 1));
+    }
+
+    #[test]
+    fn may_enter_never_rejects_a_box_a_lane_enters() {
+        let mut rng = Rng::new(7);
+        let (mut entered_some, mut rejected_some) = (0, 0);
+        for round in 0..2000 {
+            // Nearly parallel rays from nearby origins, as a camera tile makes, and boxes
+            // around, beside and behind them.
+            let spread = [1e-6, 1e-3, 0.1, 1.0][round % 4];
+            let o = rng.in_box(Vec3::splat(-3.0), Vec3::splat(3.0));
+            let d = rng.unit_vector();
+            let rays: Vec<Ray> = (0..16)
+                .map(|_| {
+                    Ray::with_interval(
+                        o + rng.unit_vector() * spread,
+                        d + rng.unit_vector() * spread,
+                        rng.f32() * 0.1,
+                        1.0 + rng.f32() * 10.0,
+                    )
+                })
+                .collect();
+            // Half the boxes on the bundle's path, half anywhere.
+            let c = if round % 2 == 0 {
+                o + d * rng.f32() * 8.0 + rng.unit_vector() * rng.f32()
+            } else {
+                rng.in_box(Vec3::splat(-4.0), Vec3::splat(4.0))
+            };
+            let h = rng.in_box(Vec3::ZERO, Vec3::splat(1.0));
+            let bounds = Aabb::new(c - h, c + h);
+            for_each_bundle(&rays, |g| {
+                let Group::Bundle(b) = g else { return };
+                {
+                    let entered = (0..b.len()).any(|i| {
+                        let r = b.ray(i);
+                        bounds.intersect(&r, r.t_max).is_some()
+                    });
+                    let t_hi = b.t_max[..b.len()].iter().copied().fold(0.0, f32::max);
+                    let may = b.may_enter(&bounds, t_hi);
+                    assert!(!entered || may, "{bounds:?} {b:?}");
+                    entered_some += entered as u32;
+                    rejected_some += !may as u32;
+                }
+            });
+        }
+        // The cases include both kinds, so the check above means something.
+        assert!(
+            entered_some > 500 && rejected_some > 500,
+            "{entered_some} {rejected_some}"
+        );
+    }
+
+    #[test]
+    fn may_enter_rejects_boxes_the_bundle_passes_by() {
+        let rays: Vec<Ray> = (0..8)
+            .map(|i| {
+                Ray::new(
+                    Vec3::new(i as f32 * 0.01, 0.0, 0.0),
+                    Vec3::new(0.1, 0.2, 1.0),
+                )
+            })
+            .collect();
+        let mut checked = 0;
+        for_each_bundle(&rays, |g| {
+            let Group::Bundle(b) = g else {
+                panic!("every ray bundles")
+            };
+            {
+                assert_eq!(b.len(), 8);
+                let ahead = Aabb::new(Vec3::new(-1.0, -1.0, 5.0), Vec3::new(2.0, 2.0, 6.0));
+                let aside = Aabb::new(Vec3::new(5.0, 5.0, -1.0), Vec3::new(6.0, 6.0, 1.0));
+                assert!(b.may_enter(&ahead, f32::INFINITY));
+                assert!(!b.may_enter(&aside, f32::INFINITY));
+                // Beyond every lane's best hit so far.
+                assert!(!b.may_enter(&ahead, 4.0));
+                checked += 1;
+            }
+        });
+        assert_eq!(checked, 1);
+    }
+}

@@ -550,7 +550,13 @@ impl<P: Primitive> Bvh<P> {
     ) {
         let rays = &rays[..rays.len().min(slots)];
         let wide = match &self.tree {
-            Tree::Wide(w) if !w.nodes.is_empty() && (!ANY || w.ablation.any_hit_path) => w,
+            // PERF: a call with one ray goes straight to the single-ray path, without sorting
+            // it into a bundle first.
+            Tree::Wide(w)
+                if rays.len() > 1 && !w.nodes.is_empty() && (!ANY || w.ablation.any_hit_path) =>
+            {
+                w
+            }
             _ => {
                 for (slot, ray) in rays.iter().enumerate() {
                     stats.single_ray();
@@ -752,16 +758,29 @@ impl<P: Primitive> Accel for Bvh<P> {
 
     /// Coherent rays of the wide tree walk it in bundles (`bundle.rs`); see
     /// [`rt_core::bundle`] for how their steps count.
+    #[inline]
     fn intersect_bundle_with<S: Stats>(
         &self,
         rays: &[Ray],
         out: &mut [Option<Hit>],
         stats: &mut S,
     ) {
+        // One ray goes straight to the single-ray query.
+        if let ([ray], [slot]) = (rays, &mut *out) {
+            stats.single_ray();
+            *slot = self.query::<S, false>(ray, stats);
+            return;
+        }
         self.bundle_query::<S, false>(rays, out.len(), stats, |slot, hit| out[slot] = hit);
     }
 
+    #[inline]
     fn occluded_bundle_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
+        if let ([ray], [slot]) = (rays, &mut *out) {
+            stats.single_ray();
+            *slot = self.query::<S, true>(ray, stats).is_some();
+            return;
+        }
         self.bundle_query::<S, true>(rays, out.len(), stats, |slot, hit| {
             out[slot] = hit.is_some()
         });

@@ -2,7 +2,9 @@
 //! primary, incoherent and shadow (any-hit) rays traced on one thread, and builds on one thread
 //! and on all threads, over the bunny, the teapot, the sphereflake and the teapot in a stadium.
 //! It prints the measurements and the ratio table (rt-bvh's default preset ÷ Embree, per scene
-//! and ray kind, with geometric means), so nobody divides by hand.
+//! and ray kind, with geometric means), so nobody divides by hand, and a table of rt-bvh's ray
+//! bundles against its single rays and Embree's 16-ray packets, on the framing view and on a
+//! closer one, with each ray set's hit share.
 //!
 //! ```sh
 //! cargo bench -p rt-benches --features embree --bench peers            # with Embree
@@ -391,6 +393,192 @@ fn bench_traces(scene: &BenchScene, tracers: &[Tracer], o: &Options, out: &mut V
     }
 }
 
+/// Bundles against packets on one scene, view and ray kind: Mrays/s of rt-bvh's wide tree with
+/// single rays and with bundles, and (with the feature `embree`) of Embree medium with single
+/// rays and with 16-ray packets.
+struct BundleResult {
+    scene: &'static str,
+    view: &'static str,
+    kind: &'static str,
+    rays: usize,
+    hit_share: f64,
+    /// (contender, Mrays/s)
+    mrays: Vec<(&'static str, f64)>,
+}
+
+/// The views of the bundle comparison: the scene's camera as `compare` frames it, and the same
+/// camera at half the distance, where the mesh fills more of the image.
+fn views(scene: &BenchScene, o: &Options) -> [(&'static str, rt_scene::Camera); 2] {
+    let framing = scene.camera(o.width, o.height);
+    let mut close = framing;
+    close.eye = close.target + 0.5 * (close.eye - close.target);
+    [("framing", framing), ("close", close)]
+}
+
+/// rt-bvh's bundles against its single rays and against Embree's packets, on primary rays in
+/// 8×8 pixel tiles and on the shadow rays of their hits in the same order. Every bundle answer
+/// must equal the single answer bit for bit (the run panics otherwise); Embree's packet answers
+/// are counted where they differ from its single ones.
+fn bench_bundles(scene: &BenchScene, o: &Options, out: &mut Vec<BundleResult>) {
+    let bvh = Bvh::build(&scene.triangles, &BvhParams::wide());
+    #[cfg(feature = "embree")]
+    let (_device, embree) = {
+        use rt_benches::embree::{EmbreeScene, Quality};
+        let device = EmbreeScene::device(Some(1)).expect("an Embree device");
+        let e = EmbreeScene::build(&device, &scene.triangles, Quality::Medium).expect("Embree");
+        (device, e)
+    };
+    for (view, camera) in views(scene, o) {
+        let (primary, _) = camera.tiled_rays(o.width, o.height, (8, 8));
+        let hits: Vec<Option<Hit>> = primary.iter().map(|r| bvh.intersect(r)).collect();
+        let light = rt_scene::raygen::default_light(&scene.bounds());
+        let shadow = rt_scene::raygen::shadow_rays(&primary, &hits, &scene.triangles, light);
+        for (kind, rays) in [("primary", &primary), ("shadow", &shadow)] {
+            let any = kind == "shadow";
+            let mut single = vec![None; rays.len()];
+            let mut bundled = vec![None; rays.len()];
+            let (mut blocked, mut blocked_b) = (vec![false; rays.len()], vec![false; rays.len()]);
+            let check = |a: &[Option<Hit>], b: &[Option<Hit>]| {
+                let bits = |h: &Option<Hit>| h.map(|h| (h.prim, h.t.to_bits(), h.u.to_bits()));
+                a.iter().zip(b).all(|(a, b)| bits(a) == bits(b))
+            };
+            if any {
+                blocked
+                    .iter_mut()
+                    .zip(rays.iter())
+                    .for_each(|(o, r)| *o = bvh.occluded(r));
+                bvh.occluded_bundle(rays, &mut blocked_b);
+                assert_eq!(blocked, blocked_b, "bundles differ: {} {view}", scene.name);
+            } else {
+                single
+                    .iter_mut()
+                    .zip(rays.iter())
+                    .for_each(|(o, r)| *o = bvh.intersect(r));
+                bvh.intersect_bundle(rays, &mut bundled);
+                assert!(
+                    check(&single, &bundled),
+                    "bundles differ: {} {view}",
+                    scene.name
+                );
+            }
+            let hit_share = if any {
+                blocked.iter().filter(|&&b| b).count()
+            } else {
+                single.iter().filter(|h| h.is_some()).count()
+            } as f64
+                / rays.len().max(1) as f64;
+            // Embree's two contenders join these with the feature `embree`.
+            #[cfg_attr(not(feature = "embree"), allow(unused_mut))]
+            let mut names: Vec<&'static str> = vec!["rt-bvh wide", "rt-bvh wide bundles"];
+            #[cfg_attr(not(feature = "embree"), allow(unused_mut))]
+            let mut fs: Vec<BuildFn<'_>> = vec![
+                Box::new(|| {
+                    let n = if any {
+                        rays.iter().filter(|r| bvh.occluded(r)).count()
+                    } else {
+                        rays.iter().filter(|r| bvh.intersect(r).is_some()).count()
+                    };
+                    std::hint::black_box(n);
+                }),
+                Box::new(|| {
+                    let mut hit = vec![None; rays.len()];
+                    let mut blocked = vec![false; rays.len()];
+                    if any {
+                        bvh.occluded_bundle(rays, &mut blocked);
+                    } else {
+                        bvh.intersect_bundle(rays, &mut hit);
+                    }
+                    std::hint::black_box((hit, blocked));
+                }),
+            ];
+            #[cfg(feature = "embree")]
+            {
+                let embree = &embree;
+                names.extend(["embree medium", "embree medium packets16"]);
+                fs.push(Box::new(move || {
+                    let n = if any {
+                        rays.iter().filter(|r| embree.occluded(r)).count()
+                    } else {
+                        rays.iter()
+                            .filter(|r| embree.intersect(r).is_some())
+                            .count()
+                    };
+                    std::hint::black_box(n);
+                }));
+                fs.push(Box::new(move || {
+                    let mut hit = vec![None; rays.len()];
+                    let mut blocked = vec![false; rays.len()];
+                    if any {
+                        embree.occluded_packets(rays, &mut blocked);
+                    } else {
+                        embree.intersect_packets(rays, &mut hit);
+                    }
+                    std::hint::black_box((hit, blocked));
+                }));
+            }
+            let ms = time_interleaved(&fs, o.passes);
+            out.push(BundleResult {
+                scene: scene.name,
+                view,
+                kind,
+                rays: rays.len(),
+                hit_share,
+                mrays: names
+                    .into_iter()
+                    .zip(ms)
+                    .map(|(n, ms)| (n, rays.len() as f64 / ms / 1e3))
+                    .collect(),
+            });
+        }
+    }
+}
+
+/// The bundle table: every contender's Mrays/s, and the ratios the bundles are judged by.
+fn bundle_report(results: &[BundleResult]) -> String {
+    let mut s = String::new();
+    let Some(first) = results.first() else {
+        return s;
+    };
+    let names: Vec<&str> = first.mrays.iter().map(|(n, _)| *n).collect();
+    let _ = writeln!(
+        s,
+        "\nBundles: primary rays in 8×8 pixel tiles and their shadow rays in the same order, \
+         single-threaded; Embree's packets take 16 consecutive rays (8×2 pixels) with the coherent \
+         flag. Mrays/s; bundles ÷ single rays and bundles ÷ Embree's packets\n"
+    );
+    let _ = writeln!(
+        s,
+        "| scene | view | rays | count | hit | {} | bundles ÷ single | bundles ÷ packets |",
+        names.join(" | ")
+    );
+    let _ = writeln!(
+        s,
+        "| --- | --- | --- | ---: | ---: |{}",
+        " ---: |".repeat(names.len() + 2)
+    );
+    let get = |r: &BundleResult, name: &str| r.mrays.iter().find(|(n, _)| *n == name).map(|m| m.1);
+    for r in results {
+        let cells: Vec<String> = r.mrays.iter().map(|(_, m)| format!("{m:.2}")).collect();
+        let over = |a: &str, b: &str| match (get(r, a), get(r, b)) {
+            (Some(a), Some(b)) => format!("{:.2}", a / b),
+            _ => "-".into(),
+        };
+        let _ = writeln!(
+            s,
+            "| {} | {} | {} | {} | {:.1}% | {} | {} | {} |",
+            r.scene,
+            r.view,
+            r.kind,
+            r.rays,
+            100.0 * r.hit_share,
+            cells.join(" | "),
+            over("rt-bvh wide bundles", "rt-bvh wide"),
+            over("rt-bvh wide bundles", "embree medium packets16"),
+        );
+    }
+    s
+}
+
 fn report(names: &[String], traces: &[TraceResult], builds: &[BuildResult], o: &Options) -> String {
     let mut s = String::new();
     let _ = writeln!(
@@ -576,6 +764,7 @@ fn main() {
         .collect();
     let mut traces = Vec::new();
     let mut builds = Vec::new();
+    let mut bundles = Vec::new();
     let mut names = Vec::new();
     for scene in &scenes {
         eprintln!("{}: {} triangles", scene.name, scene.triangles.len());
@@ -583,8 +772,10 @@ fn main() {
         let tracers = tracers(scene);
         names = tracers.iter().map(|t| t.name.clone()).collect();
         bench_traces(scene, &tracers, &o, &mut traces);
+        bench_bundles(scene, &o, &mut bundles);
     }
     print!("{}", report(&names, &traces, &builds, &o));
+    print!("{}", bundle_report(&bundles));
     if let Some(path) = &o.json {
         std::fs::write(path, to_json(&names, &traces, &builds, &o)).expect("write the JSON file");
         eprintln!("wrote {path}");

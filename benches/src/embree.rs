@@ -1,6 +1,6 @@
 //! Embree 3 as a measured baseline: a safe wrapper over the few calls of the `embree` crate's raw
 //! `sys` bindings that the benchmarks need (build a triangle scene, trace one ray, test one
-//! occlusion ray). Needs Debian's `libembree-dev` (3.13) and the feature `embree`.
+//! occlusion ray, and the same for packets of 16 coherent rays). Needs Debian's `libembree-dev` (3.13) and the feature `embree`.
 //!
 //! This is one of the two modules of the workspace allowed `unsafe` (foreign calls cannot be
 //! written without it); every block says why it is sound.
@@ -159,6 +159,68 @@ impl EmbreeScene {
     }
 }
 
+/// The lanes of one Embree packet call (`rtcIntersect16`, `rtcOccluded16`).
+pub const PACKET: usize = 16;
+
+/// A packet's valid mask: -1 for an active lane, 0 for an unused one, aligned as Embree loads it.
+#[repr(C, align(64))]
+struct Valid16([i32; PACKET]);
+
+impl EmbreeScene {
+    /// The closest hits of `rays` into `out` (as many as both have), `PACKET` consecutive rays per
+    /// `rtcIntersect16` call with the coherent flag: Embree's packet path for coherent rays.
+    pub fn intersect_packets(&self, rays: &[Ray], out: &mut [Option<(u32, f32)>]) {
+        for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+            let n = rays.len().min(out.len());
+            let mut valid = Valid16([0; PACKET]);
+            // SAFETY: `RTCRayHit16` is plain old data (arrays of f32 and u32), for which all
+            // zero bytes are a valid value.
+            let mut packet: sys::RTCRayHit16 = unsafe { std::mem::zeroed() };
+            for (i, r) in rays[..n].iter().enumerate() {
+                valid.0[i] = -1;
+                let p = &mut packet.ray;
+                (p.org_x[i], p.org_y[i], p.org_z[i]) = (r.origin.x, r.origin.y, r.origin.z);
+                (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (r.dir().x, r.dir().y, r.dir().z);
+                (p.tnear[i], p.tfar[i], p.mask[i]) = (r.t_min, r.t_max, u32::MAX);
+                packet.hit.geomID[i] = INVALID_ID;
+                packet.hit.primID[i] = INVALID_ID;
+            }
+            let mut context = coherent_context();
+            // SAFETY: a committed scene alive until `Drop`; `valid` and `packet` are locals
+            // aligned to 64 bytes (`Valid16` and bindgen's `repr(align(64))`), as Embree's
+            // 16-wide loads require, and only accessed during the call.
+            unsafe { sys::rtcIntersect16(valid.0.as_ptr(), self.scene, &mut context, &mut packet) };
+            for (i, o) in out[..n].iter_mut().enumerate() {
+                *o = (packet.hit.geomID[i] != INVALID_ID)
+                    .then_some((packet.hit.primID[i], packet.ray.tfar[i]));
+            }
+        }
+    }
+
+    /// Whether anything is hit in each ray's interval, into `out`, `PACKET` rays per
+    /// `rtcOccluded16` call with the coherent flag.
+    pub fn occluded_packets(&self, rays: &[Ray], out: &mut [bool]) {
+        for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+            let n = rays.len().min(out.len());
+            let mut valid = Valid16([0; PACKET]);
+            // SAFETY: as in `intersect_packets`: plain old data, all zeros valid.
+            let mut p: sys::RTCRay16 = unsafe { std::mem::zeroed() };
+            for (i, r) in rays[..n].iter().enumerate() {
+                valid.0[i] = -1;
+                (p.org_x[i], p.org_y[i], p.org_z[i]) = (r.origin.x, r.origin.y, r.origin.z);
+                (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (r.dir().x, r.dir().y, r.dir().z);
+                (p.tnear[i], p.tfar[i], p.mask[i]) = (r.t_min, r.t_max, u32::MAX);
+            }
+            let mut context = coherent_context();
+            // SAFETY: as in `intersect_packets`.
+            unsafe { sys::rtcOccluded16(valid.0.as_ptr(), self.scene, &mut context, &mut p) };
+            for (i, o) in out[..n].iter_mut().enumerate() {
+                *o = p.tfar[i] == f32::NEG_INFINITY;
+            }
+        }
+    }
+}
+
 impl Drop for EmbreeScene {
     fn drop(&mut self) {
         // SAFETY: both handles were created (scene) or retained (device) by `build` and are
@@ -188,6 +250,15 @@ fn context() -> sys::RTCIntersectContext {
         flags: sys::RTCIntersectContextFlags::INCOHERENT,
         filter: None,
         instID: [INVALID_ID],
+    }
+}
+
+/// [`context`] with the coherent flag, which Embree's packet traversal uses for rays that
+/// travel together.
+fn coherent_context() -> sys::RTCIntersectContext {
+    sys::RTCIntersectContext {
+        flags: sys::RTCIntersectContextFlags::COHERENT,
+        ..context()
     }
 }
 

@@ -48,23 +48,30 @@ impl Answers {
         for (h, &t) in best.iter_mut().zip(&b.t_max) {
             h.t = t;
         }
+        let mut t = [f32::NEG_INFINITY; BUNDLE_LANES];
+        t[..b.len()].copy_from_slice(&b.t_max[..b.len()]);
         Self {
             best,
-            t: b.t_max,
+            t,
             alive: b.all_lanes(),
         }
     }
 
-    /// The largest best `t` of the live lanes: no lane can use a box entered beyond it.
+    /// The largest best `t` of the live lanes: no lane can use a box entered beyond it. (A lane
+    /// that has left, and every lane past the bundle's end, holds `-inf`.)
+    // PERF: written over whole vectors of lanes, which the compiler turns into `maxps`: a loop
+    // over the live lanes' bits with `f32::max` was a tenth of the bundle traversal's samples
+    // (`perf record`, bunny primary rays, 8×8 tiles).
+    #[inline(always)]
     fn t_hi(&self) -> f32 {
-        let mut hi = f32::NEG_INFINITY;
-        let mut m = self.alive;
-        while m != 0 {
-            let i = m.trailing_zeros() as usize;
-            m &= m - 1;
-            hi = hi.max(self.t[i]);
+        let mut hi = [f32::NEG_INFINITY; 8];
+        for lanes in self.t.as_chunks::<8>().0 {
+            for (h, &t) in hi.iter_mut().zip(lanes) {
+                *h = if t > *h { t } else { *h };
+            }
         }
-        hi
+        hi.into_iter()
+            .fold(f32::NEG_INFINITY, |a, b| if b > a { b } else { a })
     }
 }
 
@@ -214,8 +221,10 @@ pub(crate) fn wide_bundle<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
                 let best = &mut answers.best[i];
                 if leaves.test::<X, S, ANY>(simd, current.items(), &r, &ray, best, stats) {
                     answers.alive &= !(1 << i);
+                    answers.t[i] = f32::NEG_INFINITY;
+                } else {
+                    answers.t[i] = best.t;
                 }
-                answers.t[i] = best.t;
             }
             if ANY && answers.alive == 0 {
                 return;

@@ -52,6 +52,7 @@ struct Plan {
     scale: [&'static str; 4],
     animate: Vec<&'static str>,
     more: Vec<&'static str>,
+    bundles: Vec<&'static str>,
 }
 
 impl Plan {
@@ -68,6 +69,7 @@ impl Plan {
                 scale: ["--min", "1k", "--max", "3k"],
                 animate: vec!["--scene", "teapot:2k", "--frames", "2"],
                 more: vec!["sphereflake:20k", "random-soup:5k"],
+                bundles: vec!["sphereflake:20k"],
             };
         }
         Self {
@@ -93,6 +95,12 @@ impl Plan {
                 "../shared/meshes/cheburashka.obj",
                 "../shared/meshes/fandisk.obj",
                 "../shared/meshes/homer.obj",
+            ],
+            bundles: vec![
+                BUNNY,
+                "sphereflake",
+                "teapot-in-stadium",
+                "../shared/meshes/rocker-arm.obj",
             ],
         }
     }
@@ -168,6 +176,23 @@ fn measure_all(args: &Args) -> Result<PathBuf, String> {
     argv.push("--json");
     let run = measure(&argv)?;
     shootout_table(&mut page, &run);
+
+    page += "\n## Ray bundles\n\nThe same rays traced as bundles (`Accel::intersect_bundle`, \
+             `occluded_bundle`): primary rays in 8×8 pixel tiles and the shadow rays of their \
+             hits in that order, on one thread; each bundle pass timed right after the same \
+             row's single rays, every bundle answer checked bit for bit against the single \
+             answer. Structures without a bundle traversal trace every ray alone.\n\n";
+    let mut runs = Vec::new();
+    for kind in ["primary", "shadow"] {
+        for scene in &plan.bundles {
+            let mut argv = vec!["compare", "--scene", scene, "--rays", kind, "-s", MAIN_ROWS];
+            argv.extend(["--bundle", "8x8", "-j", "1"]);
+            argv.extend(&image);
+            argv.push("--json");
+            runs.push(measure(&argv)?);
+        }
+    }
+    bundle_table(&mut page, &runs);
 
     page += "\n## Closest points\n\nThe primitive nearest to each point: half of the points \
              anywhere in the scene box grown by a quarter on every side, half within 2% of its \
@@ -418,6 +443,56 @@ fn speed_table(page: &mut String, runs: &[Run]) {
         );
     }
     page.push('\n');
+    for run in runs {
+        let _ = writeln!(page, "- `{}`", run.command);
+    }
+}
+
+/// `compare --bundle --json` runs as one table: per scene and ray kind its hit share and, per
+/// row, the bundles' Mrays/s with their ratio to the row's single rays; the commands under it.
+fn bundle_table(page: &mut String, runs: &[Run]) {
+    let Some(first) = runs.first() else { return };
+    let rows: Vec<String> = first.json["results"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .filter_map(|r| r["structure"].as_str().map(String::from))
+        .filter(|name| name != "brute-force")
+        .collect();
+    let _ = writeln!(
+        page,
+        "| scene | rays | hit | {} |\n| --- | --- | ---: |{}",
+        rows.join(" | "),
+        " ---: |".repeat(rows.len())
+    );
+    for run in runs {
+        let j = &run.json;
+        let cell = |name: &str| {
+            j["results"]
+                .as_array()
+                .into_iter()
+                .flatten()
+                .find(|r| r["structure"] == name)
+                .map_or("-".into(), |r| {
+                    let b = &r["bundle"];
+                    format!(
+                        "{} ({:.2}×)",
+                        three_digits(f(&b["mrays_per_s"])),
+                        f(&b["over_single"])
+                    )
+                })
+        };
+        let cells: Vec<String> = rows.iter().map(|n| cell(n)).collect();
+        let _ = writeln!(
+            page,
+            "| {} | {} | {:.1}% | {} |",
+            j["scene"].as_str().unwrap_or("?"),
+            j["ray_kind"].as_str().unwrap_or("?"),
+            100.0 * f(&j["hit_share"]),
+            cells.join(" | ")
+        );
+    }
+    page.push_str("\nMrays/s of the bundles (their speed ÷ the same row's single rays).\n\n");
     for run in runs {
         let _ = writeln!(page, "- `{}`", run.command);
     }

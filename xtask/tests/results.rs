@@ -20,6 +20,7 @@ fn the_quick_page_has_every_section_and_its_commands() {
         "## More meshes",
         "## Other rays",
         "## One thread",
+        "## Ray bundles",
         "## Closest points",
         "## Instances",
         "## Scale",

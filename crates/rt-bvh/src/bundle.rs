@@ -61,7 +61,8 @@ impl Answers {
     /// that has left, and every lane past the bundle's end, holds `-inf`.)
     // PERF: written over whole vectors of lanes, which the compiler turns into `maxps`: a loop
     // over the live lanes' bits with `f32::max` was a tenth of the bundle traversal's samples
-    // (`perf record`, bunny primary rays, 8×8 tiles).
+    // (`perf record`, bunny primary rays, 8×8 tiles). Bunny at half the framing distance, single
+    // thread, two alternating runs each: primary bundles 26.1 -> 24.4 ms, shadow 18.2 -> 16.9.
     #[inline(always)]
     fn t_hi(&self) -> f32 {
         let mut hi = [f32::NEG_INFINITY; 8];

@@ -405,17 +405,31 @@ fn shootout_table(page: &mut String, run: &Run) {
     }
 }
 
-/// Several `compare --json` runs as one table: per scene its size, hit share and every row's
-/// speed, the commands listed under it.
-fn speed_table(page: &mut String, runs: &[Run]) {
-    let Some(first) = runs.first() else { return };
-    let rows: Vec<String> = first.json["results"]
+/// The rows of a `compare --json` run, brute force left out.
+fn row_names(run: &Run) -> Vec<String> {
+    run.json["results"]
         .as_array()
         .into_iter()
         .flatten()
         .filter_map(|r| r["structure"].as_str().map(String::from))
         .filter(|name| name != "brute-force")
-        .collect();
+        .collect()
+}
+
+/// The figures of row `name` in a `compare --json` run.
+fn result<'a>(json: &'a Value, name: &str) -> Option<&'a Value> {
+    json["results"]
+        .as_array()
+        .into_iter()
+        .flatten()
+        .find(|r| r["structure"] == name)
+}
+
+/// Several `compare --json` runs as one table: per scene its size, hit share and every row's
+/// speed, the commands listed under it.
+fn speed_table(page: &mut String, runs: &[Run]) {
+    let Some(first) = runs.first() else { return };
+    let rows = row_names(first);
     let _ = writeln!(
         page,
         "| scene | triangles | hit | {} |\n| --- | ---: | ---: |{}",
@@ -424,14 +438,8 @@ fn speed_table(page: &mut String, runs: &[Run]) {
     );
     for run in runs {
         let j = &run.json;
-        let speed = |name: &str| {
-            j["results"]
-                .as_array()
-                .into_iter()
-                .flatten()
-                .find(|r| r["structure"] == name)
-                .map_or("-".into(), |r| three_digits(f(&r["mrays_per_s"])))
-        };
+        let speed =
+            |name: &str| result(j, name).map_or("-".into(), |r| three_digits(f(&r["mrays_per_s"])));
         let cells: Vec<String> = rows.iter().map(|n| speed(n)).collect();
         let _ = writeln!(
             page,
@@ -452,13 +460,7 @@ fn speed_table(page: &mut String, runs: &[Run]) {
 /// row, the bundles' Mrays/s with their ratio to the row's single rays; the commands under it.
 fn bundle_table(page: &mut String, runs: &[Run]) {
     let Some(first) = runs.first() else { return };
-    let rows: Vec<String> = first.json["results"]
-        .as_array()
-        .into_iter()
-        .flatten()
-        .filter_map(|r| r["structure"].as_str().map(String::from))
-        .filter(|name| name != "brute-force")
-        .collect();
+    let rows = row_names(first);
     let _ = writeln!(
         page,
         "| scene | rays | hit | {} |\n| --- | --- | ---: |{}",
@@ -468,19 +470,14 @@ fn bundle_table(page: &mut String, runs: &[Run]) {
     for run in runs {
         let j = &run.json;
         let cell = |name: &str| {
-            j["results"]
-                .as_array()
-                .into_iter()
-                .flatten()
-                .find(|r| r["structure"] == name)
-                .map_or("-".into(), |r| {
-                    let b = &r["bundle"];
-                    format!(
-                        "{} ({:.2}×)",
-                        three_digits(f(&b["mrays_per_s"])),
-                        f(&b["over_single"])
-                    )
-                })
+            result(j, name).map_or("-".into(), |r| {
+                let b = &r["bundle"];
+                format!(
+                    "{} ({:.2}×)",
+                    three_digits(f(&b["mrays_per_s"])),
+                    f(&b["over_single"])
+                )
+            })
         };
         let cells: Vec<String> = rows.iter().map(|n| cell(n)).collect();
         let _ = writeln!(

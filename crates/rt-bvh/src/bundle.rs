@@ -171,7 +171,7 @@ pub(crate) fn wide_bundle<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
     let mut stack = Stack::<(u32, u64, f32), WIDE_STACK>::new();
     let (mut current, mut active) = (ChildRef::node(0), b.all_lanes());
     let mut t_hi = answers.t_hi();
-    let mut shears = [None; BUNDLE_LANES];
+    let mut lane_rays: [Option<(rt_core::Ray, Shear)>; BUNDLE_LANES] = [None; BUNDLE_LANES];
     loop {
         stats.node_visit();
         stats.bundle_lanes(b.len() as u32, active.count_ones());
@@ -215,9 +215,12 @@ pub(crate) fn wide_bundle<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
             while m != 0 {
                 let i = m.trailing_zeros() as usize;
                 m &= m - 1;
-                let ray = b.ray(i);
-                // PERF: each lane's shear (three divisions) is computed at its first leaf only.
-                let shear = *shears[i].get_or_insert_with(|| Shear::new(ray.dir()));
+                // Each lane's ray (its reciprocal direction: three divisions) and shear (three
+                // more) are made at its first leaf only.
+                let (ray, shear) = *lane_rays[i].get_or_insert_with(|| {
+                    let ray = b.ray(i);
+                    (ray, Shear::new(ray.dir()))
+                });
                 let r = RayData::with_shear(simd, &ray, BoxRay::new(simd, &ray), shear);
                 let best = &mut answers.best[i];
                 if leaves.test::<X, S, ANY>(simd, current.items(), &r, &ray, best, stats) {

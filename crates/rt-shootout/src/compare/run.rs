@@ -524,24 +524,12 @@ fn trace_row(
             differences: got
                 .iter()
                 .zip(&answers)
-                .filter(|(a, b)| !same_answer(**a, **b))
+                .filter(|(a, b)| !rt_conformance::same_bits(**a, **b))
                 .count(),
         });
     }
     row.answers = answers;
     row
-}
-
-/// Whether two answers are the same bits (an any-hit answer's `t` is a NaN marker: its
-/// presence is the answer).
-fn same_answer(a: Option<Hit>, b: Option<Hit>) -> bool {
-    let bits = |h: Option<Hit>| {
-        h.map(|h| {
-            let f = |x: f32| if x.is_nan() { u32::MAX } else { x.to_bits() };
-            (h.prim, f(h.t), f(h.u), f(h.v))
-        })
-    };
-    bits(a) == bits(b)
 }
 
 impl Row {

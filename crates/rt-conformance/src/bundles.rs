@@ -9,6 +9,30 @@ use rt_core::{Accel, Counters, Hit, NoStats, Ray, Rng};
 /// common bundle widths (8 and 64 lanes), and a long slice.
 pub const BUNDLE_SIZES: [usize; 8] = [1, 7, 8, 9, 63, 64, 65, 1000];
 
+/// The slices of `len` rays when their lengths cycle through [`BUNDLE_SIZES`], upwards from one
+/// ray or downwards from the long slice: two passes that, between them, hand every length to the
+/// queries once the rays are enough (217 for all lengths upwards), and start on different rays.
+// PERF: one pass per length traced each ray set 32 times; the fine grid's identical-triangles
+// case took 36 s of the CI run's tests (opt-level 1). Two cycling passes per order trace it 8
+// times.
+fn cycled_slices(len: usize, downwards: bool) -> Vec<std::ops::Range<usize>> {
+    let mut sizes = BUNDLE_SIZES;
+    if downwards {
+        sizes.reverse();
+    }
+    let mut slices = Vec::new();
+    let mut start = 0;
+    for size in sizes.iter().cycle() {
+        if start >= len {
+            break;
+        }
+        let end = (start + size).min(len);
+        slices.push(start..end);
+        start = end;
+    }
+    slices
+}
+
 /// The orders the kit re-bundles rays in, each with its name for messages: as given; shuffled;
 /// the direction octants interleaved (each run of rays mixes all octants present); and invalid
 /// rays (a NaN origin, a zero direction, an empty interval) interleaved with the given ones.
@@ -55,7 +79,8 @@ pub fn same_bits(a: Option<Hit>, b: Option<Hit>) -> bool {
 }
 
 /// Checks that `accel`'s bundle queries answer every ray of `rays`, in every order of
-/// [`bundle_orders`] and every slice length of [`BUNDLE_SIZES`], exactly as its single-ray
+/// [`bundle_orders`] and in slices whose lengths cycle through [`BUNDLE_SIZES`] (upwards and
+/// downwards), exactly as its single-ray
 /// queries do (the same bits, [`same_bits`]); that counting events changes no answer; and that
 /// slices of unequal lengths answer as many rays as both have and leave the rest alone. With
 /// `any` false, only the closest-hit queries are checked.
@@ -80,20 +105,29 @@ pub(crate) fn compare_bundles_probed<A: Accel>(
         } else {
             Vec::new()
         };
-        for size in BUNDLE_SIZES {
+        for downwards in [false, true] {
+            let slices = cycled_slices(rays.len(), downwards);
             let mut hits = vec![None; rays.len()];
             let mut occluded = vec![false; rays.len()];
-            for (k, chunk) in rays.chunks(size).enumerate() {
+            for range in &slices {
+                let chunk = &rays[range.clone()];
                 probe.bundle(&chunk[0], chunk.len());
-                let range = k * size..k * size + chunk.len();
                 accel.intersect_bundle_with(chunk, &mut hits[range.clone()], &mut NoStats);
                 if any {
-                    accel.occluded_bundle_with(chunk, &mut occluded[range], &mut NoStats);
+                    accel.occluded_bundle_with(chunk, &mut occluded[range.clone()], &mut NoStats);
                 }
             }
             let at = |i: usize| {
+                let range = slices
+                    .iter()
+                    .find(|r| r.contains(&i))
+                    .expect("every ray is sliced");
                 format!(
-                    "in bundles of {size} (rays {order}), slot {i}, for ray {}\n  rays-file line: {}",
+                    "in a slice of {} rays (rays {order}, slice lengths cycling {}), slot {} of \
+                     the slice, for ray {}\n  rays-file line: {}",
+                    range.len(),
+                    if downwards { "downwards" } else { "upwards" },
+                    i - range.start,
                     rays[i].to_rust(),
                     rays[i].to_line()
                 )
@@ -185,4 +219,37 @@ fn counted_and_uneven<A: Accel>(
         }
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The two passes cut every ray into exactly one slice each, and between them use every
+    /// length once the rays are enough.
+    #[test]
+    fn cycled_slices_cover_the_rays_and_use_every_length() {
+        for len in [0, 1, 5, 216, 217, 1000, 1217, 3000] {
+            let mut lengths = std::collections::BTreeSet::new();
+            for downwards in [false, true] {
+                let slices = cycled_slices(len, downwards);
+                let mut next = 0;
+                for r in &slices {
+                    assert_eq!(r.start, next, "{len} rays, {slices:?}");
+                    assert!(!r.is_empty(), "{len} rays, {slices:?}");
+                    next = r.end;
+                    lengths.insert(r.len());
+                }
+                assert_eq!(next, len, "{len} rays, {slices:?}");
+            }
+            if len >= 217 + 1000 {
+                assert!(
+                    BUNDLE_SIZES.iter().all(|s| lengths.contains(s)),
+                    "{len}: {lengths:?}"
+                );
+            }
+        }
+        assert_eq!(cycled_slices(20, false), [0..1, 1..8, 8..16, 16..20]);
+        assert_eq!(cycled_slices(1003, true), [0..1000, 1000..1003]);
+    }
 }

@@ -469,7 +469,10 @@ fn a_bundle_traversal_that_drops_a_lane_fails() {
         e.starts_with("drops-lane: intersect_bundle gives None where intersect gives Some"),
         "{e}"
     );
-    assert!(e.contains("in bundles of 7 (rays as given)"), "{e}");
+    assert!(
+        e.contains("in a slice of 7 rays (rays as given, slice lengths cycling upwards), slot"),
+        "{e}"
+    );
     // Through the whole kit too: the scene's check fails on the bundles.
     let e = check_case_within::<DropsLane>(&(), &s.triangles, &s.rays, Duration::from_secs(20))
         .expect_err("the kit must run the bundle check");

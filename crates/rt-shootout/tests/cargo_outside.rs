@@ -52,6 +52,9 @@ rt-shootout = {{ path = "{shootout}" }}
     let out = Command::new(env!("CARGO"))
         .current_dir(&krate)
         .env("CARGO_TARGET_DIR", root.join("target/outside"))
+        // Nobody steps through this build in a debugger: without debug information it takes
+        // less time and disk (the crate's own profile is cargo's default, full debug info).
+        .env("CARGO_PROFILE_DEV_DEBUG", "false")
         .args(["run", "--quiet", "--offline", "--"])
         .args(
             "--scene random-soup --structures groups,bvh,kdtree --width 40 --height 30 \

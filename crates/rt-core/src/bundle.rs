@@ -13,6 +13,9 @@
 //! whose reciprocal is infinite) are handed back one by one, to be answered by the single-ray
 //! query, which answers invalid rays at once, as it always does.
 //!
+//! At the leaves, [`Lanes`] tests one primitive against many lanes, eight per vector step
+//! (AVX2 when the CPU has it), each lane with exactly its single-ray arithmetic.
+//!
 //! [`intersect_frame`] and [`occluded_frame`] trace a whole ray list in tiles on rayon's threads
 //! (with the `parallel` feature; in order on the calling thread without it).
 //!
@@ -25,6 +28,8 @@
 //! Primitive tests count once per lane and primitive, as single rays count them. A ray a bundle
 //! finishes alone (see [`Stats::single_ray`]) counts as a single ray.
 
+pub use crate::lanes::Lanes;
+pub use crate::simd::Isa;
 use crate::{Aabb, Accel, Hit, NoStats, Ray, SLAB_FAR_SCALE, Stats};
 use glam::Vec3;
 

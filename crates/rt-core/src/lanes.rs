@@ -1,0 +1,464 @@
+//! A bundle's lanes at the leaves: one primitive tested against many lanes at once, each lane
+//! with exactly the arithmetic of its single-ray test.
+//!
+//! Structures whose cells or leaves list primitives by index (the kd-tree, the grids, the
+//! octree) test each listed primitive against every lane of a [`Bundle`] that is still tracing.
+//! For the watertight triangle ([`Triangle::intersect_watertight`]), [`Lanes`] runs the test
+//! over eight lanes per step, in arrays the compiler turns into vector instructions: every lane
+//! takes the same operations in the same order as the scalar test (Rust never fuses a multiply
+//! and an add unasked), so it gets the same bits of `t`, `u` and `v`. A lane whose edge
+//! function is exactly zero, where the scalar test recomputes in `f64`, is handed to the scalar
+//! test itself. Other primitives are tested lane by lane with [`Primitive::intersect`].
+//!
+//! Which lanes a primitive is tested against is the structure's choice: any lane may be tested
+//! against any primitive, since a hit found is a true hit of that lane, and the closest of the
+//! hits (ties to the smaller index) does not depend on which extra primitives were tried. A
+//! structure must only make sure that every primitive its single-ray walk would test for a lane
+//! is tested for that lane too.
+//!
+//! The vector kernels are chosen at run time ([`Isa`](crate::bundle::Isa): AVX2 on x86-64
+//! CPUs that have it); `RT_ACCEL_PORTABLE=1` forces the portable ones, which the tests run too.
+
+use crate::bundle::{BUNDLE_LANES, Bundle};
+use crate::{Hit, Primitive, Ray, Shear, Stats, Triangle, TriangleTest};
+
+/// Lanes per vector step.
+pub(crate) const W: usize = 8;
+
+/// Steps of [`W`] lanes in a bundle.
+const STEPS: usize = BUNDLE_LANES / W;
+
+/// The lanes of one [`Bundle`] with each lane's watertight shear and best hit so far.
+#[derive(Clone, Debug)]
+pub struct Lanes {
+    /// Each lane's ray, the same bits as the bundle's (and the ray it came from).
+    pub rays: [Ray; BUNDLE_LANES],
+    /// `sx`, `sy`, `sz` of each lane's [`Shear`].
+    shear: [[[f32; W]; STEPS]; 3],
+    /// The bundle's origins, per axis and step.
+    origin: [[[f32; W]; STEPS]; 3],
+    /// `t_min` per lane.
+    t_min: [[f32; W]; STEPS],
+    /// The lanes whose dominant axis ([`Shear::kz`]) is `a`, for each axis `a`.
+    by_axis: [u64; 3],
+    /// The axis order `[kx, ky, kz]` of the lanes whose dominant axis is `a` (the bundle's one
+    /// octant fixes `kx` and `ky` given `kz`).
+    order: [[usize; 3]; 3],
+    /// The best hit of each lane: its `t` (the lane's `t_max` while it has none)...
+    t: [[f32; W]; STEPS],
+    /// ... its primitive (`u32::MAX` while none) ...
+    prim: [[u32; W]; STEPS],
+    /// ... and its `u`, `v`.
+    uv: [[[f32; W]; STEPS]; 2],
+    /// The vector instructions the kernels use.
+    isa: crate::simd::Isa,
+}
+
+impl Lanes {
+    /// The lanes of `bundle`, none hit yet: each lane's best `t` is its `t_max`. The kernels
+    /// use the best instructions this CPU has ([`Isa::detect`](crate::bundle::Isa::detect)).
+    pub fn new(bundle: &Bundle) -> Self {
+        Self::with_isa(bundle, crate::simd::Isa::detect())
+    }
+
+    /// [`Lanes::new`] with the kernels' instruction set chosen by the caller (the tests run
+    /// each one); an instruction set this CPU lacks falls back to the portable kernels.
+    pub fn with_isa(bundle: &Bundle, isa: crate::simd::Isa) -> Self {
+        let isa = if isa == crate::simd::Isa::detect_ignoring_env() {
+            isa
+        } else {
+            crate::simd::Isa::Portable
+        };
+        let mut lanes = Self {
+            rays: [Ray::new(glam::Vec3::ZERO, glam::Vec3::X); BUNDLE_LANES],
+            shear: [[[0.0; W]; STEPS]; 3],
+            origin: [[[0.0; W]; STEPS]; 3],
+            t_min: [[0.0; W]; STEPS],
+            by_axis: [0; 3],
+            order: [[0, 1, 2], [2, 0, 1], [1, 2, 0]],
+            t: [[f32::NAN; W]; STEPS],
+            prim: [[u32::MAX; W]; STEPS],
+            uv: [[[0.0; W]; STEPS]; 2],
+            isa,
+        };
+        for i in 0..bundle.len() {
+            let ray = bundle.ray(i);
+            let s = Shear::new(ray.dir());
+            let (step, j) = (i / W, i % W);
+            lanes.shear[0][step][j] = s.sx;
+            lanes.shear[1][step][j] = s.sy;
+            lanes.shear[2][step][j] = s.sz;
+            for a in 0..3 {
+                lanes.origin[a][step][j] = bundle.origin[a][i];
+            }
+            lanes.t_min[step][j] = ray.t_min;
+            lanes.t[step][j] = ray.t_max;
+            lanes.by_axis[s.kz] |= 1 << i;
+            lanes.order[s.kz] = [s.kx, s.ky, s.kz];
+            lanes.rays[i] = ray;
+        }
+        lanes
+    }
+
+    /// Lane `i`'s best `t` so far (its `t_max` while it has no hit).
+    #[inline(always)]
+    pub fn t(&self, i: usize) -> f32 {
+        self.t[i / W][i % W]
+    }
+
+    /// Every lane's best `t` so far (lanes past [`len`](Self::len) hold NaN).
+    #[inline(always)]
+    pub fn best_t(&self) -> &[f32; BUNDLE_LANES] {
+        self.t
+            .as_flattened()
+            .try_into()
+            .expect("the steps hold BUNDLE_LANES lanes")
+    }
+
+    /// Lane `i`'s answer: its closest hit, if any.
+    #[inline(always)]
+    pub fn hit(&self, i: usize) -> Option<Hit> {
+        let (step, j) = (i / W, i % W);
+        let prim = self.prim[step][j];
+        (prim != u32::MAX).then_some(Hit {
+            prim,
+            t: self.t[step][j],
+            u: self.uv[0][step][j],
+            v: self.uv[1][step][j],
+        })
+    }
+
+    /// Tests primitive `id` against the lanes of `mask` for their closest hits, as
+    /// [`leaf::test_primitives`](crate::leaf::test_primitives) does for one ray: a hit within
+    /// `[t_min, best t]` that beats the lane's best ([`Hit::beats`]) replaces it. Counts one
+    /// primitive test per lane.
+    #[inline(always)]
+    pub fn intersect<P: Primitive, S: Stats>(
+        &mut self,
+        prim: &P,
+        id: u32,
+        mask: u64,
+        stats: &mut S,
+    ) {
+        self.test::<P, S, false>(prim, id, mask, stats);
+    }
+
+    /// Tests primitive `id` against the lanes of `mask` for any hit within `[t_min, t_max]`;
+    /// returns the lanes it blocks (their primitive becomes `id`). Counts one primitive test per
+    /// lane.
+    #[inline(always)]
+    pub fn occluded<P: Primitive, S: Stats>(
+        &mut self,
+        prim: &P,
+        id: u32,
+        mask: u64,
+        stats: &mut S,
+    ) -> u64 {
+        self.test::<P, S, true>(prim, id, mask, stats)
+    }
+
+    #[inline(always)]
+    fn test<P: Primitive, S: Stats, const ANY: bool>(
+        &mut self,
+        prim: &P,
+        id: u32,
+        mask: u64,
+        stats: &mut S,
+    ) -> u64 {
+        for _ in 0..mask.count_ones() {
+            stats.prim_test();
+        }
+        match prim.as_triangle() {
+            Some((tri, TriangleTest::Watertight)) => self.watertight::<ANY>(&tri, id, mask),
+            _ => self.one_by_one::<P, ANY>(prim, id, mask),
+        }
+    }
+
+    /// Any primitive, one lane at a time.
+    #[inline(always)]
+    fn one_by_one<P: Primitive, const ANY: bool>(&mut self, prim: &P, id: u32, mask: u64) -> u64 {
+        let mut hit = 0;
+        let mut m = mask;
+        while m != 0 {
+            let i = m.trailing_zeros() as usize;
+            m &= m - 1;
+            if let Some(h) = prim.intersect(&self.rays[i], self.t(i)) {
+                if ANY {
+                    self.prim[i / W][i % W] = id;
+                    hit |= 1 << i;
+                } else {
+                    self.offer(i, id, h.t, h.u, h.v);
+                }
+            }
+        }
+        hit
+    }
+
+    /// Lane `i`'s hit of primitive `id`, kept if it beats the lane's best.
+    #[inline(always)]
+    fn offer(&mut self, i: usize, id: u32, t: f32, u: f32, v: f32) {
+        let (step, j) = (i / W, i % W);
+        if Hit::beats(t, id, self.t[step][j], self.prim[step][j]) {
+            self.t[step][j] = t;
+            self.prim[step][j] = id;
+            self.uv[0][step][j] = u;
+            self.uv[1][step][j] = v;
+        }
+    }
+
+    /// The watertight test over the lanes of `mask`, eight at a time, grouped by dominant axis.
+    #[inline(always)]
+    fn watertight<const ANY: bool>(&mut self, tri: &Triangle, id: u32, mask: u64) -> u64 {
+        let mut hit = 0;
+        for step in 0..STEPS {
+            let in_step = (mask >> (step * W)) as u8;
+            if in_step == 0 {
+                continue;
+            }
+            for axis in 0..3 {
+                let m = in_step & (self.by_axis[axis] >> (step * W)) as u8;
+                if m != 0 {
+                    let h = self.watertight_step::<ANY>(tri, id, step, self.order[axis], m);
+                    hit |= u64::from(h) << (step * W);
+                }
+            }
+        }
+        hit
+    }
+
+    /// [`Triangle::intersect_sheared`] for the lanes `m` of step `step`, whose axis order is `k`;
+    /// returns the lanes hit (for `ANY`) or whose best hit it became.
+    #[inline(always)]
+    fn watertight_step<const ANY: bool>(
+        &mut self,
+        tri: &Triangle,
+        id: u32,
+        step: usize,
+        k: [usize; 3],
+        m: u8,
+    ) -> u8 {
+        let [kx, ky, kz] = k;
+        let verts = [
+            tri.v0[kx], tri.v0[ky], tri.v0[kz], tri.v1[kx], tri.v1[ky], tri.v1[kz], tri.v2[kx],
+            tri.v2[ky], tri.v2[kz],
+        ];
+        let input = Step8 {
+            origin: [
+                &self.origin[kx][step],
+                &self.origin[ky][step],
+                &self.origin[kz][step],
+            ],
+            shear: [
+                &self.shear[0][step],
+                &self.shear[1][step],
+                &self.shear[2][step],
+            ],
+            t_min: &self.t_min[step],
+            t_max: &self.t[step],
+        };
+        let out = crate::simd::watertight8(self.isa, &verts, &input);
+        let mut hit = 0u8;
+        // Lanes whose hit lies in their interval: few of the lanes a primitive is tested
+        // against, so the tie rule and the update go lane by lane.
+        let mut rest = out.inside & m & !out.zero;
+        while rest != 0 {
+            let j = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            if ANY {
+                self.prim[step][j] = id;
+                hit |= 1 << j;
+            } else if Hit::beats(out.t[j], id, self.t[step][j], self.prim[step][j]) {
+                self.offer(step * W + j, id, out.t[j], out.u[j], out.v[j]);
+                hit |= 1 << j;
+            }
+        }
+        // Lanes with an edge function of exactly zero: the scalar test, which decides them in
+        // `f64`, so they too answer exactly as their single ray.
+        let mut rest = out.zero & m;
+        while rest != 0 {
+            let j = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            let i = step * W + j;
+            let ray = &self.rays[i];
+            if let Some(h) = tri.intersect_sheared(&Shear::new(ray.dir()), ray, self.t(i)) {
+                if ANY {
+                    self.prim[step][j] = id;
+                    hit |= 1 << j;
+                } else if Hit::beats(h.t, id, self.t(i), self.prim[step][j]) {
+                    self.offer(i, id, h.t, h.u, h.v);
+                    hit |= 1 << j;
+                }
+            }
+        }
+        hit
+    }
+}
+
+/// Eight lanes' input to the watertight test ([`crate::simd::watertight8`]): origins in the
+/// lanes' axis order `kx`, `ky`, `kz`, their shears `sx`, `sy`, `sz`, and their intervals.
+pub(crate) struct Step8<'a> {
+    pub origin: [&'a [f32; W]; 3],
+    pub shear: [&'a [f32; W]; 3],
+    pub t_min: &'a [f32; W],
+    pub t_max: &'a [f32; W],
+}
+
+/// Eight lanes' watertight test: `t`, `u`, `v` of each, the lanes whose hit lies in their
+/// interval, and the lanes with an edge function of exactly zero (whose other outputs are to
+/// be ignored: the scalar test decides them).
+#[derive(Clone, Copy, Debug, Default)]
+pub(crate) struct Out8 {
+    pub t: [f32; W],
+    pub u: [f32; W],
+    pub v: [f32; W],
+    pub inside: u8,
+    pub zero: u8,
+}
+
+/// [`Triangle::intersect_sheared`] for eight lanes, in plain arrays: the portable kernel, and
+/// the reference the vector kernels match bit for bit. `verts` holds the three vertices in the
+/// lanes' axis order.
+#[inline(always)]
+pub(crate) fn watertight8_portable(verts: &[f32; 9], input: &Step8) -> Out8 {
+    let [ox, oy, oz] = input.origin;
+    let [sx, sy, sz] = input.shear;
+    let mut out = Out8::default();
+    for j in 0..W {
+        // The vertices relative to the origin, in the lane's axis order, then sheared; the
+        // same operations in the same order as the scalar test.
+        let (ax, ay, az) = (verts[0] - ox[j], verts[1] - oy[j], verts[2] - oz[j]);
+        let (bx, by, bz) = (verts[3] - ox[j], verts[4] - oy[j], verts[5] - oz[j]);
+        let (cx, cy, cz) = (verts[6] - ox[j], verts[7] - oy[j], verts[8] - oz[j]);
+        let (ax, ay) = (ax - sx[j] * az, ay - sy[j] * az);
+        let (bx, by) = (bx - sx[j] * bz, by - sy[j] * bz);
+        let (cx, cy) = (cx - sx[j] * cz, cy - sy[j] * cz);
+        let u = cx * by - cy * bx;
+        let v = ax * cy - ay * cx;
+        let w = bx * ay - by * ax;
+        let zero = u == 0.0 || v == 0.0 || w == 0.0;
+        let outside = (u < 0.0 || v < 0.0 || w < 0.0) && (u > 0.0 || v > 0.0 || w > 0.0);
+        let det = u + v + w;
+        let (az, bz, cz) = (sz[j] * az, sz[j] * bz, sz[j] * cz);
+        let inv = 1.0 / det;
+        let t = (u * az + v * bz + w * cz) * inv;
+        let inside =
+            !outside && det != 0.0 && !det.is_nan() && t >= input.t_min[j] && t <= input.t_max[j];
+        out.t[j] = t;
+        out.u[j] = v * inv;
+        out.v[j] = w * inv;
+        out.inside |= u8::from(inside) << j;
+        out.zero |= u8::from(zero) << j;
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::bundle::{Group, Isa, for_each_bundle};
+    use crate::{Rng, glam::Vec3};
+
+    /// Triangles and rays where the watertight test is hard: shared edges and vertices hit
+    /// exactly (edge functions of exactly zero), axis-aligned triangles, grazing and
+    /// parallel rays, ties between copies, and random ones.
+    fn cases() -> (Vec<Triangle>, Vec<Ray>) {
+        let mut rng = Rng::new(11);
+        let mut tris = vec![
+            Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y),
+            Triangle::new(Vec3::X, Vec3::new(1.0, 1.0, 0.0), Vec3::Y),
+            Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y),
+            Triangle::new(Vec3::ZERO, Vec3::Z, Vec3::Y),
+            Triangle::new(
+                Vec3::new(0.0, 0.0, 1.0),
+                Vec3::new(2.0, 0.0, 1.0),
+                Vec3::new(0.0, 2.0, 1.0),
+            ),
+        ];
+        for _ in 0..40 {
+            let c = rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0));
+            tris.push(Triangle::new(
+                c + rng.unit_vector(),
+                c + rng.unit_vector(),
+                c + rng.unit_vector(),
+            ));
+        }
+        let mut rays = Vec::new();
+        let origin = Vec3::new(0.25, 0.5, -3.0);
+        for k in 0..=8 {
+            for l in 0..=8 {
+                // Through the lattice of quarter points: vertices and edges of the first two
+                // triangles exactly.
+                let to = Vec3::new(k as f32 * 0.125, l as f32 * 0.125, 0.0);
+                rays.push(Ray::new(origin, to - origin));
+                rays.push(Ray::new(to - Vec3::Z, Vec3::Z));
+            }
+        }
+        for _ in 0..600 {
+            let o = rng.in_box(Vec3::splat(-4.0), Vec3::splat(4.0));
+            let t = tris[rng.below(tris.len() as u32) as usize];
+            let aim = t.v0 + (t.v1 - t.v0) * rng.f32() * 0.5 + (t.v2 - t.v0) * rng.f32() * 0.5;
+            rays.push(Ray::with_interval(
+                o,
+                aim - o,
+                rng.f32() * 0.5,
+                0.5 + rng.f32() * 2.0,
+            ));
+        }
+        (tris, rays)
+    }
+
+    /// Every lane of every bundle, on every instruction set, gets the scalar test's answer bit
+    /// for bit: closest hits over all triangles (ties to the smaller index), and any hits.
+    #[test]
+    fn lanes_answer_as_the_scalar_test_on_every_instruction_set() {
+        let (tris, rays) = cases();
+        let mut isas = vec![Isa::Portable];
+        #[cfg(target_arch = "x86_64")]
+        isas.push(Isa::Avx2);
+        for isa in isas {
+            for_each_bundle(&rays, |group| {
+                let Group::Bundle(b) = group else { return };
+                let mut lanes = Lanes::with_isa(b, isa);
+                let mut any = Lanes::with_isa(b, isa);
+                let mut blocked = 0u64;
+                for (id, tri) in tris.iter().enumerate() {
+                    lanes.intersect(tri, id as u32, b.all_lanes(), &mut crate::NoStats);
+                    blocked |= any.occluded(
+                        tri,
+                        id as u32,
+                        b.all_lanes() & !blocked,
+                        &mut crate::NoStats,
+                    );
+                }
+                for i in 0..b.len() {
+                    let ray = b.ray(i);
+                    let mut best = crate::leaf::no_hit(ray.t_max);
+                    for (id, tri) in tris.iter().enumerate() {
+                        if let Some(h) = tri.intersect(&ray, best.t)
+                            && Hit::beats(h.t, id as u32, best.t, best.prim)
+                        {
+                            best = Hit {
+                                prim: id as u32,
+                                t: h.t,
+                                u: h.u,
+                                v: h.v,
+                            };
+                        }
+                    }
+                    let want = crate::leaf::answer::<false>(best);
+                    let got = lanes.hit(i);
+                    let bits = |h: Option<Hit>| {
+                        h.map(|h| (h.prim, h.t.to_bits(), h.u.to_bits(), h.v.to_bits()))
+                    };
+                    assert_eq!(bits(got), bits(want), "{isa:?}, lane {i}, ray {ray:?}");
+                    let occluded = tris.iter().any(|t| t.intersect(&ray, ray.t_max).is_some());
+                    assert_eq!(
+                        blocked >> i & 1 != 0,
+                        occluded,
+                        "{isa:?}, lane {i}, ray {ray:?}"
+                    );
+                }
+            });
+        }
+    }
+}

@@ -1,0 +1,133 @@
+//! Run-time choice of vector instructions for the bundle kernels ([`Lanes`](crate::bundle::Lanes)).
+//!
+//! The only `unsafe` of rt-core besides `pod_struct!`: the AVX2 kernel, called only when the CPU
+//! was found to have AVX2. Each kernel here has a portable twin in plain arrays
+//! ([`watertight8_portable`]) that it matches bit for bit: the same IEEE operations in the same
+//! order, no fused multiply-add.
+#![allow(unsafe_code)]
+
+use crate::lanes::{Out8, Step8, watertight8_portable};
+
+/// The instruction set the kernels run with.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Isa {
+    /// Plain arrays, whatever the compiler makes of them for the build's target.
+    Portable,
+    /// AVX2 (x86-64), found on this CPU at run time.
+    #[cfg(target_arch = "x86_64")]
+    Avx2,
+}
+
+impl Isa {
+    /// The best this CPU has; `RT_ACCEL_PORTABLE=1` in the environment forces the portable one
+    /// (the tests run both).
+    pub fn detect() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        if portable_forced() {
+            return Isa::Portable;
+        }
+        Self::detect_ignoring_env()
+    }
+
+    /// The best this CPU has, whatever the environment says.
+    pub(crate) fn detect_ignoring_env() -> Self {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx2") {
+            return Isa::Avx2;
+        }
+        Isa::Portable
+    }
+}
+
+/// Whether the environment asks for the portable kernels, read once.
+#[cfg(target_arch = "x86_64")]
+fn portable_forced() -> bool {
+    static FORCED: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
+    *FORCED.get_or_init(|| std::env::var_os("RT_ACCEL_PORTABLE").is_some_and(|v| v == "1"))
+}
+
+/// The watertight test of eight lanes with instruction set `isa`.
+#[inline(always)]
+pub(crate) fn watertight8(isa: Isa, verts: &[f32; 9], input: &Step8) -> Out8 {
+    match isa {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `Isa::Avx2` is made only by `Isa::detect` after it found AVX2 on this CPU.
+        Isa::Avx2 => unsafe { x86::watertight8(verts, input) },
+        Isa::Portable => watertight8_portable(verts, input),
+    }
+}
+
+#[cfg(target_arch = "x86_64")]
+mod x86 {
+    use super::{Out8, Step8};
+    use std::arch::x86_64::*;
+
+    /// [`watertight8_portable`](crate::lanes::watertight8_portable) in AVX2: the same
+    /// operations on eight lanes at once.
+    #[target_feature(enable = "avx2")]
+    pub(super) fn watertight8(verts: &[f32; 9], input: &Step8) -> Out8 {
+        // SAFETY: every load reads eight `f32` of an array of eight, and every store writes
+        // eight into one; unaligned loads and stores need no alignment.
+        unsafe {
+            let load = |a: &[f32; 8]| _mm256_loadu_ps(a.as_ptr());
+            let [ox, oy, oz] = input.origin.map(load);
+            let [sx, sy, sz] = input.shear.map(load);
+            let rel = |k: usize| {
+                (
+                    _mm256_sub_ps(_mm256_set1_ps(verts[k]), ox),
+                    _mm256_sub_ps(_mm256_set1_ps(verts[k + 1]), oy),
+                    _mm256_sub_ps(_mm256_set1_ps(verts[k + 2]), oz),
+                )
+            };
+            let (ax, ay, az) = rel(0);
+            let (bx, by, bz) = rel(3);
+            let (cx, cy, cz) = rel(6);
+            let shear = |x: __m256, s: __m256, z: __m256| _mm256_sub_ps(x, _mm256_mul_ps(s, z));
+            let (ax, ay) = (shear(ax, sx, az), shear(ay, sy, az));
+            let (bx, by) = (shear(bx, sx, bz), shear(by, sy, bz));
+            let (cx, cy) = (shear(cx, sx, cz), shear(cy, sy, cz));
+            let cross = |p: __m256, q: __m256, r: __m256, s: __m256| {
+                _mm256_sub_ps(_mm256_mul_ps(p, q), _mm256_mul_ps(r, s))
+            };
+            let u = cross(cx, by, cy, bx);
+            let v = cross(ax, cy, ay, cx);
+            let w = cross(bx, ay, by, ax);
+            let zero = _mm256_setzero_ps();
+            let eq0 = |x| _mm256_cmp_ps::<_CMP_EQ_OQ>(x, zero);
+            let lt0 = |x| _mm256_cmp_ps::<_CMP_LT_OQ>(x, zero);
+            let gt0 = |x| _mm256_cmp_ps::<_CMP_GT_OQ>(x, zero);
+            let any_zero = _mm256_or_ps(_mm256_or_ps(eq0(u), eq0(v)), eq0(w));
+            let neg = _mm256_or_ps(_mm256_or_ps(lt0(u), lt0(v)), lt0(w));
+            let pos = _mm256_or_ps(_mm256_or_ps(gt0(u), gt0(v)), gt0(w));
+            let outside = _mm256_and_ps(neg, pos);
+            let det = _mm256_add_ps(_mm256_add_ps(u, v), w);
+            // Ordered not-equal: false for NaN, as `det != 0.0 && !det.is_nan()`.
+            let det_ok = _mm256_cmp_ps::<_CMP_NEQ_OQ>(det, zero);
+            let (az, bz, cz) = (
+                _mm256_mul_ps(sz, az),
+                _mm256_mul_ps(sz, bz),
+                _mm256_mul_ps(sz, cz),
+            );
+            let inv = _mm256_div_ps(_mm256_set1_ps(1.0), det);
+            let sum = _mm256_add_ps(
+                _mm256_add_ps(_mm256_mul_ps(u, az), _mm256_mul_ps(v, bz)),
+                _mm256_mul_ps(w, cz),
+            );
+            let t = _mm256_mul_ps(sum, inv);
+            let in_range = _mm256_and_ps(
+                _mm256_cmp_ps::<_CMP_GE_OQ>(t, load(input.t_min)),
+                _mm256_cmp_ps::<_CMP_LE_OQ>(t, load(input.t_max)),
+            );
+            let inside = _mm256_andnot_ps(outside, _mm256_and_ps(det_ok, in_range));
+            let mut out = Out8 {
+                inside: _mm256_movemask_ps(inside) as u8,
+                zero: _mm256_movemask_ps(any_zero) as u8,
+                ..Out8::default()
+            };
+            _mm256_storeu_ps(out.t.as_mut_ptr(), t);
+            _mm256_storeu_ps(out.u.as_mut_ptr(), _mm256_mul_ps(v, inv));
+            _mm256_storeu_ps(out.v.as_mut_ptr(), _mm256_mul_ps(w, inv));
+            out
+        }
+    }
+}

@@ -1,0 +1,568 @@
+//! Bundles through the grid: coherent grid traversal (Wald, Ize, Kensler, Knoll & Parker 2006,
+//! "Ray tracing animated scenes using coherent grid traversal").
+//!
+//! A bundle walks the grid one slice at a time along its major axis (the axis its lanes travel
+//! along fastest). In each slice it covers the rectangle of cells that any live lane's segment
+//! crosses there, and tests each primitive listed in those cells once for the whole bundle,
+//! against all live lanes ([`Lanes`], eight lanes per vector step), where single rays walk the
+//! same cells one ray at a time and test the same primitives once per ray. A per-bundle mailbox
+//! keeps a primitive listed in several cells of the rectangle, or of consecutive slices, from
+//! being tested again.
+//!
+//! # Exact
+//! Each lane answers exactly as its single ray: every hit a lane records is a true hit of its
+//! own test ([`Lanes`] runs each lane's own arithmetic), and the closest of them, ties to the
+//! smaller index, is the single ray's answer as long as the bundle tests, for each lane, every
+//! primitive that lane's DDA walk tests before it stops. It does more: a lane's rectangle holds
+//! every cell whose closed box its segment meets, with the segment's ends widened by a bound on
+//! their rounding error ([`segment_span`]), and the walk stops a lane only after the slice whose
+//! far side lies beyond its best hit, as the DDA stops after the cell.
+//!
+//! # When single rays are cheaper
+//! A rectangle much wider than its lanes (rays that spread, or an incoherent set) makes every
+//! lane test primitives of cells it never crosses. Before each slice the walk compares the
+//! rectangle's cells, times the vector steps a test takes, with the cells the live lanes
+//! cross one by one; when the bundle would cost more, the live lanes finish as single rays.
+
+use crate::Grid;
+use crate::cell::GridShape;
+use crate::dda::{Dda, RayAxes};
+use rt_core::bundle::{BUNDLE_LANES, Bundle, Group, Lanes};
+use rt_core::{Hit, Primitive, Ray, SLAB_FAR_SCALE, Stats};
+
+/// The most cells per slice a bundle's rectangle may widen by, summed over its two axes, for the
+/// bundle to walk together ([`Frame::coherent`]).
+const MAX_SPREAD: f32 = 1.0;
+
+/// Mailbox slots per bundle (see [`Mailbox`]).
+const MAILBOX: usize = 128;
+
+/// A bundle keeps walking while its cost so far (cells of its rectangles times the vector steps
+/// their tests take) is at most this many times what single rays would have cost (the cells each
+/// lane's own segment meets), plus [`COST_SLACK`].
+const MAX_COST_RATIO: f32 = 2.0;
+
+/// Slack for the first slices, where lanes that have not entered yet make a bundle look
+/// wasteful.
+const COST_SLACK: f32 = 16.0;
+
+/// The cells of one axis, inclusive.
+type Span = (u32, u32);
+
+impl<P: Primitive> Grid<P> {
+    /// The bundle queries: [`for_each_bundle`](rt_core::bundle::for_each_bundle) groups,
+    /// each bundle of two or more lanes walked slice by slice, every other ray walked alone.
+    /// Calls `answer(slot, hit)` for each of the first `slots` rays (for `ANY`, `Some` when the
+    /// ray is blocked).
+    pub(crate) fn bundle_query<S: Stats, const ANY: bool>(
+        &self,
+        rays: &[Ray],
+        slots: usize,
+        stats: &mut S,
+        mut answer: impl FnMut(usize, Option<Hit>),
+    ) {
+        let rays = &rays[..rays.len().min(slots)];
+        if rays.len() < 2 || self.refs.is_empty() {
+            for (slot, ray) in rays.iter().enumerate() {
+                stats.single_ray();
+                answer(slot, self.walk::<S, ANY>(ray, stats));
+            }
+            return;
+        }
+        {
+            rt_core::bundle::for_each_bundle(rays, |group| match group {
+                Group::Bundle(b)
+                    if b.len() > 1
+                        && Frame::may_cohere(&self.shape, b)
+                        && Frame::new(&self.shape, b).coherent() =>
+                {
+                    let mut lanes = Lanes::new(b);
+                    let alone = self.slices::<S, ANY>(b, &mut lanes, stats);
+                    for i in 0..b.len() {
+                        let slot = b.slot[i] as usize;
+                        if alone >> i & 1 != 0 {
+                            stats.single_ray();
+                            answer(slot, self.walk::<S, ANY>(&lanes.rays[i], stats));
+                        } else {
+                            answer(
+                                slot,
+                                lanes
+                                    .hit(i)
+                                    .map(|h| if ANY { Hit { t: f32::NAN, ..h } } else { h }),
+                            );
+                        }
+                    }
+                }
+                Group::Bundle(b) => {
+                    for i in 0..b.len() {
+                        stats.single_ray();
+                        answer(b.slot[i] as usize, self.walk::<S, ANY>(&b.ray(i), stats));
+                    }
+                }
+                Group::Single(slot, ray) => {
+                    stats.single_ray();
+                    answer(slot, self.walk::<S, ANY>(ray, stats));
+                }
+            });
+        }
+    }
+
+    /// Walks bundle `b` slice by slice along its major axis, recording hits in `lanes`.
+    /// Returns the lanes left to single rays.
+    #[inline(always)]
+    fn slices<S: Stats, const ANY: bool>(
+        &self,
+        b: &Bundle,
+        lanes: &mut Lanes,
+        stats: &mut S,
+    ) -> u64 {
+        let shape = &self.shape;
+        // Each lane's interval inside the grid's box, as its single walk computes it.
+        let mut t0 = [0.0f32; BUNDLE_LANES];
+        let mut t1 = [f32::NEG_INFINITY; BUNDLE_LANES];
+        let mut live = 0u64;
+        for i in 0..b.len() {
+            if let Some((a, z)) = shape
+                .bounds()
+                .intersect(&lanes.rays[i], lanes.rays[i].t_max)
+            {
+                (t0[i], t1[i]) = (a, z);
+                live |= 1 << i;
+            }
+        }
+        if live == 0 {
+            return 0;
+        }
+        let frame = Frame::new(shape, b);
+        let res = shape.resolution_per_axis();
+        let (start, mut s) = start_slices(shape, lanes, frame.major, &t0, live, frame.forward);
+        let mut mailbox = Mailbox::new();
+        // What the bundle has cost so far and what single rays would have: cells times vector
+        // steps, against the cells the lanes cross one by one.
+        let (mut cost, mut single_cost) = (0.0f32, 0.0f32);
+        loop {
+            let (near, far) = if frame.forward {
+                (s, s + 1)
+            } else {
+                (s + 1, s)
+            };
+            let cut = frame.slice(
+                (
+                    s,
+                    shape.plane(frame.major, near),
+                    shape.plane(frame.major, far),
+                ),
+                b,
+                lanes.best_t(),
+                &start,
+                &t1,
+                live,
+            );
+            live &= !cut.done;
+            if live == 0 {
+                return 0;
+            }
+            let crossing = cut.crossing & live;
+            if crossing != 0 {
+                let us = frame.span(shape, frame.u, cut.u);
+                let vs = frame.span(shape, frame.v, cut.v);
+                let cells = ((us.1 - us.0 + 1) * (vs.1 - vs.0 + 1)) as f32;
+                let steps = crossing.to_le_bytes().iter().filter(|&&x| x != 0).count() as f32;
+                cost += cells * steps;
+                single_cost += crossing.count_ones() as f32 * frame.cells_per_lane;
+                if cost > MAX_COST_RATIO * single_cost + COST_SLACK {
+                    return live;
+                }
+                // Every lane's best hit so far is at most this (lanes only get closer).
+                let t_hi = lanes
+                    .best_t()
+                    .iter()
+                    .fold(f32::NEG_INFINITY, |a, &t| a.max(t));
+                let mut lanes_in = crossing;
+                for cv in vs.0..=vs.1 {
+                    for cu in us.0..=us.1 {
+                        let mut c = [0u32; 3];
+                        (c[frame.major], c[frame.u], c[frame.v]) = (s, cu, cv);
+                        let blocked = self.bundle_cell::<S, ANY>(
+                            c,
+                            (b, t_hi),
+                            lanes,
+                            lanes_in,
+                            &mut mailbox,
+                            stats,
+                        );
+                        live &= !blocked;
+                        lanes_in &= !blocked;
+                        if live == 0 {
+                            return 0;
+                        }
+                    }
+                }
+            }
+            // The next slice, if the grid has one.
+            if frame.forward {
+                if s + 1 >= res[frame.major] {
+                    return 0;
+                }
+                s += 1;
+            } else {
+                if s == 0 {
+                    return 0;
+                }
+                s -= 1;
+            }
+        }
+    }
+
+    /// Tests the primitives of cell `c` against the lanes of `lanes_in` that the mailbox does
+    /// not show tested already, skipping those whose box no lane of `b` can enter before
+    /// `t_hi`; returns the lanes blocked (for `ANY`; none otherwise).
+    ///
+    /// The skip is Wald et al.'s frustum culling of triangles, with [`Bundle::may_enter`]'s
+    /// interval bound as the frustum: a lane that hits a primitive enters its box at or before
+    /// the hit, which its slab test finds (the test a BVH culls with), and the bound is
+    /// conservative for every lane's slab test.
+    #[inline(always)]
+    fn bundle_cell<S: Stats, const ANY: bool>(
+        &self,
+        c: [u32; 3],
+        (b, t_hi): (&Bundle, f32),
+        lanes: &mut Lanes,
+        mut lanes_in: u64,
+        mailbox: &mut Mailbox,
+        stats: &mut S,
+    ) -> u64 {
+        stats.node_visit();
+        stats.bundle_lanes(b.len() as u32, lanes_in.count_ones());
+        let mut blocked = 0;
+        let i = self.shape.index(c);
+        for &id in &self.refs[self.cells[i] as usize..self.cells[i + 1] as usize] {
+            let untested = mailbox.untested(id, lanes_in);
+            for _ in 0..(lanes_in & !untested).count_ones() {
+                stats.mailbox_skip();
+            }
+            if untested == 0 {
+                continue;
+            }
+            let prim = &self.prims[id as usize];
+            if !b.may_enter(&prim.bounds(), t_hi) {
+                continue;
+            }
+            if ANY {
+                let hit = lanes.occluded(prim, id, untested, stats);
+                blocked |= hit;
+                lanes_in &= !hit;
+                if lanes_in == 0 {
+                    break;
+                }
+            } else {
+                lanes.intersect(prim, id, untested, stats);
+            }
+        }
+        blocked
+    }
+}
+
+/// A bundle's mailbox: for the last primitive seen in each slot (its index modulo [`MAILBOX`]),
+/// the lanes it was tested against. A primitive met again in a later cell of the rectangle or a
+/// later slice is tested only against lanes it was not tested against; a slot taken over by
+/// another primitive only costs a second test, never a wrong answer.
+struct Mailbox {
+    ids: [u32; MAILBOX],
+    tested: [u64; MAILBOX],
+}
+
+impl Mailbox {
+    fn new() -> Self {
+        Self {
+            ids: [u32::MAX; MAILBOX],
+            tested: [0; MAILBOX],
+        }
+    }
+
+    /// The lanes of `lanes` that primitive `id` has not been tested against; records them as
+    /// tested.
+    #[inline(always)]
+    fn untested(&mut self, id: u32, lanes: u64) -> u64 {
+        let k = id as usize % MAILBOX;
+        if self.ids[k] != id {
+            self.ids[k] = id;
+            self.tested[k] = 0;
+        }
+        let new = lanes & !self.tested[k];
+        self.tested[k] |= lanes;
+        new
+    }
+}
+
+/// The slice where each live lane starts, and the first of them in the direction of travel:
+/// the slice of the first cell of the lane's single walk ([`Dda::start`], which finds it by
+/// comparing the planes' parameters with the lane's entry), stepped one back, since a lane's
+/// closest hit may lie just before its entry by rounding (a ray that grazes the box's corner).
+fn start_slices(
+    shape: &GridShape,
+    lanes: &Lanes,
+    major: usize,
+    t0: &[f32; BUNDLE_LANES],
+    live: u64,
+    forward: bool,
+) -> ([u32; BUNDLE_LANES], u32) {
+    let n = shape.resolution_per_axis()[major];
+    let mut start = [0u32; BUNDLE_LANES];
+    let mut first = if forward { u32::MAX } else { 0 };
+    let mut m = live;
+    while m != 0 {
+        let i = m.trailing_zeros() as usize;
+        m &= m - 1;
+        let k = Dda::start(shape, &RayAxes::new(&lanes.rays[i]), t0[i]).cell[major];
+        start[i] = if forward {
+            k.saturating_sub(1)
+        } else {
+            (k + 1).min(n - 1)
+        };
+        first = if forward {
+            first.min(start[i])
+        } else {
+            first.max(start[i])
+        };
+    }
+    (start, first)
+}
+
+/// A bundle's walk through the slices of its major axis: the axes, and each lane's slopes
+/// across the slices.
+struct Frame {
+    /// The axis the slices are cut along, and the other two.
+    major: usize,
+    u: usize,
+    v: usize,
+    /// Whether the lanes travel towards larger coordinates along `major`.
+    forward: bool,
+    /// Each lane's `d_u / d_major` and `d_v / d_major`.
+    slope: [[f32; BUNDLE_LANES]; 2],
+    /// The largest `|origin|` of a lane along `u` and `v`.
+    origin_max: [f32; 2],
+    /// About how many cells one lane crosses per slice (from the lanes' mean slopes), for the
+    /// cost of single rays.
+    cells_per_lane: f32,
+    /// How many cells per slice the lanes' rectangle widens by, from the spread of their slopes.
+    spread: f32,
+}
+
+/// What a slice does to the lanes: the lanes that cross it, those done before it, and the
+/// smallest and largest coordinate the crossing lanes reach along `u` and `v` there.
+struct Cut {
+    crossing: u64,
+    done: u64,
+    u: (f32, f32),
+    v: (f32, f32),
+}
+
+impl Frame {
+    /// The walk of bundle `b`'s lanes through `shape`: slices along the axis the first lane
+    /// travels fastest (all lanes share direction signs, and no component is zero).
+    fn new(shape: &GridShape, b: &Bundle) -> Self {
+        let d = [0, 1, 2].map(|a| b.dir[a][0].abs());
+        let major = if d[0] >= d[1] && d[0] >= d[2] {
+            0
+        } else if d[1] >= d[2] {
+            1
+        } else {
+            2
+        };
+        let (u, v) = ((major + 1) % 3, (major + 2) % 3);
+        let mut slope = [[0.0; BUNDLE_LANES]; 2];
+        let mut origin_max = [0.0f32; 2];
+        let mut mean = [0.0f32; 2];
+        let mut range = [(f32::INFINITY, f32::NEG_INFINITY); 2];
+        for (k, axis) in [u, v].into_iter().enumerate() {
+            for (i, s) in slope[k].iter_mut().enumerate().take(b.len()) {
+                *s = b.dir[axis][i] * b.inv_dir[major][i];
+                origin_max[k] = origin_max[k].max(b.origin[axis][i].abs());
+                mean[k] += s.abs();
+                range[k] = (range[k].0.min(*s), range[k].1.max(*s));
+            }
+        }
+        let n = b.len() as f32;
+        let size = [0, 1, 2].map(|a| {
+            let e = shape.bounds().extent()[a];
+            e / shape.resolution_per_axis()[a] as f32
+        });
+        // Cells per slice along `axis`, for a slope of `s`.
+        let per_slice = |s: f32, axis: usize| {
+            if size[axis] > 0.0 {
+                s * size[major] / size[axis]
+            } else {
+                0.0
+            }
+        };
+        Self {
+            major,
+            u,
+            v,
+            forward: b.dir[major][0] > 0.0,
+            slope,
+            origin_max,
+            cells_per_lane: (1.0 + per_slice(mean[0] / n, u)) * (1.0 + per_slice(mean[1] / n, v)),
+            spread: per_slice(range[0].1 - range[0].0, u) + per_slice(range[1].1 - range[1].0, v),
+        }
+    }
+
+    /// A quick test before [`Frame::new`] that rejects bundles of rays in clearly different
+    /// directions from the bundle's bounds alone (the first check of random rays): the spread
+    /// of the slopes `d_u / d_major = inv_major / inv_u` is at least that of the bounds'
+    /// corners' ratios, so this rejects no bundle that [`Frame::coherent`] accepts, give or
+    /// take rounding.
+    fn may_cohere(shape: &GridShape, b: &Bundle) -> bool {
+        let lb = b.lane_bounds();
+        let (lo, hi) = (lb.inv_dir_lo.to_array(), lb.inv_dir_hi.to_array());
+        let d = [0, 1, 2].map(|a| b.dir[a][0].abs());
+        let major = if d[0] >= d[1] && d[0] >= d[2] {
+            0
+        } else if d[1] >= d[2] {
+            1
+        } else {
+            2
+        };
+        let size =
+            [0, 1, 2].map(|a| shape.bounds().extent()[a] / shape.resolution_per_axis()[a] as f32);
+        let mut spread = 0.0;
+        for axis in [(major + 1) % 3, (major + 2) % 3] {
+            if size[axis] > 0.0 {
+                // `inv_major / inv_axis` over the corners: the ratio's extremes, halved for the
+                // rounding a corner's ratio may carry beyond the lanes' own.
+                let r = [
+                    lo[major] / lo[axis],
+                    lo[major] / hi[axis],
+                    hi[major] / lo[axis],
+                    hi[major] / hi[axis],
+                ];
+                let (a, z) = r
+                    .iter()
+                    .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, z), &x| {
+                        (a.min(x), z.max(x))
+                    });
+                spread += 0.5 * (z - a) * size[major] / size[axis];
+            }
+        }
+        spread <= MAX_SPREAD
+    }
+
+    /// Whether the lanes travel together: their rectangle widens by at most [`MAX_SPREAD`]
+    /// cells per slice. Rays of a camera's pixel tile, or shadow rays towards one light, do;
+    /// rays in random directions do not, and go singly at once.
+    fn coherent(&self) -> bool {
+        self.spread <= MAX_SPREAD
+    }
+
+    /// The cut of slice `s`, between the planes `near` and `far` (in the order the lanes meet
+    /// them), through the `live` lanes, whose best hits so far are `best`, whose walks start at
+    /// the slices `start` and whose grid intervals end at `t1`.
+    ///
+    /// A lane is done when it reaches the slice beyond its best hit or its exit, as its single
+    /// walk stops after the cell it leaves beyond either. It crosses the slices from its start
+    /// on; its line's coordinates at the two planes bound its segment in the slice (the line
+    /// is straight, the bounds are its ends; outside the grid they clamp to its edge cells).
+    #[inline(always)]
+    fn slice(
+        &self,
+        (s, near, far): (u32, f32, f32),
+        b: &Bundle,
+        best: &[f32; BUNDLE_LANES],
+        start: &[u32; BUNDLE_LANES],
+        t1: &[f32; BUNDLE_LANES],
+        live: u64,
+    ) -> Cut {
+        const W: usize = 8;
+        let (m, u, v) = (self.major, self.u, self.v);
+        let mut lo = [[f32::INFINITY; W]; 2];
+        let mut hi = [[f32::NEG_INFINITY; W]; 2];
+        let (mut crossing, mut done) = (0u64, 0u64);
+        for step in 0..BUNDLE_LANES / W {
+            if (live >> (step * W)) as u8 == 0 {
+                continue;
+            }
+            let mut cross = [false; W];
+            let mut gone = [false; W];
+            for j in 0..W {
+                let i = step * W + j;
+                let (dn, df) = (near - b.origin[m][i], far - b.origin[m][i]);
+                let tn = dn * b.inv_dir[m][i];
+                gone[j] = tn > best[i] * SLAB_FAR_SCALE || tn > t1[i] * SLAB_FAR_SCALE;
+                let started = if self.forward {
+                    s >= start[i]
+                } else {
+                    s <= start[i]
+                };
+                cross[j] = started;
+                for (k, axis) in [u, v].into_iter().enumerate() {
+                    let o = b.origin[axis][i];
+                    let (a, z) = (o + self.slope[k][i] * dn, o + self.slope[k][i] * df);
+                    let keep = cross[j] && (live >> i & 1 != 0);
+                    lo[k][j] = if keep {
+                        lo[k][j].min(a.min(z))
+                    } else {
+                        lo[k][j]
+                    };
+                    hi[k][j] = if keep {
+                        hi[k][j].max(a.max(z))
+                    } else {
+                        hi[k][j]
+                    };
+                }
+            }
+            for j in 0..W {
+                crossing |= u64::from(cross[j]) << (step * W + j);
+                done |= u64::from(gone[j]) << (step * W + j);
+            }
+        }
+        let reduce = |k: usize| {
+            (
+                lo[k].iter().fold(f32::INFINITY, |a, &x| a.min(x)),
+                hi[k].iter().fold(f32::NEG_INFINITY, |a, &x| a.max(x)),
+            )
+        };
+        Cut {
+            crossing,
+            done: done & live,
+            u: reduce(0),
+            v: reduce(1),
+        }
+    }
+
+    /// The cells along `axis` (`u` or `v`) whose closed boxes meet the coordinates `(lo, hi)`
+    /// widened on both sides by a bound on their rounding error.
+    ///
+    /// The coordinates are `o + s·(x - o_major)` with the rounded slope `s`; the true line
+    /// differs by a few units in the last place of `|o|` and of the result: `2⁻²⁰` of twice
+    /// their sum is more than sixteen of those units. The cells then come from comparisons with
+    /// the planes themselves ([`GridShape::plane`]), which the builder used, not from a rounded
+    /// division. A non-finite coordinate widens to the whole axis.
+    #[inline(always)]
+    fn span(&self, shape: &GridShape, axis: usize, (lo, hi): (f32, f32)) -> Span {
+        let n = shape.resolution_per_axis()[axis];
+        let k = if axis == self.u { 0 } else { 1 };
+        let err = 2.0 * (self.origin_max[k] + lo.abs().max(hi.abs())) * (1.0 / 1_048_576.0);
+        let (lo, hi) = (lo - err, hi + err);
+        if !(lo.is_finite() && hi.is_finite()) {
+            return (0, n - 1);
+        }
+        // The first cell whose far plane is at or past `lo`, the last whose near plane is at or
+        // before `hi`.
+        let mut k0 = shape.cell_of(axis, lo);
+        while k0 > 0 && shape.plane(axis, k0) >= lo {
+            k0 -= 1;
+        }
+        while k0 + 1 < n && shape.plane(axis, k0 + 1) < lo {
+            k0 += 1;
+        }
+        let mut k1 = shape.cell_of(axis, hi).max(k0);
+        while k1 + 1 < n && shape.plane(axis, k1 + 1) <= hi {
+            k1 += 1;
+        }
+        while k1 > k0 && shape.plane(axis, k1) > hi {
+            k1 -= 1;
+        }
+        (k0, k1)
+    }
+}

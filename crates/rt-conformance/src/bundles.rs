@@ -221,6 +221,60 @@ fn counted_and_uneven<A: Accel>(
     Ok(())
 }
 
+/// Checks that a structure with its own bundle traversal walks coherent rays together: primary
+/// rays of a 256×192 image in 8×8 tiles over the sphereflake and the teapot in a stadium, and
+/// their shadow rays towards a point light, traced as bundles answer exactly as single rays,
+/// with bundle steps counted ([`Counters::lane_slots`]) and fewer than a quarter of the primary
+/// rays finished alone. For structure crates' own tests: a bundle traversal that quietly sends
+/// every ray down the single-ray path fails it.
+///
+/// # Panics
+/// At the first difference, or when the rays did not travel together.
+pub fn check_coherent_bundles<A: Accel<Prim = rt_core::Triangle>>(params: &A::Params) {
+    for name in ["sphereflake", "teapot-in-stadium"] {
+        let mesh = rt_scene::scenes::builtin(name).expect("a built-in scene");
+        let tris = mesh.triangles();
+        let bounds = rt_core::valid_bounds(&tris);
+        let camera = rt_scene::Camera::framing(&bounds, 256, 192);
+        let (primary, _) = camera.tiled_rays(256, 192, (8, 8));
+        let accel = A::build(&tris, params);
+        let light = bounds.max + bounds.extent();
+        let shadow: Vec<Ray> = primary
+            .iter()
+            .filter_map(|r| {
+                let p = r.at(accel.intersect(r)?.t);
+                Some(Ray::with_interval(p, light - p, 1e-3, 1.0))
+            })
+            .collect();
+        let single: Vec<Option<Hit>> = primary.iter().map(|r| accel.intersect(r)).collect();
+        let mut hits = vec![None; primary.len()];
+        let mut c = Counters::default();
+        accel.intersect_bundle_with(&primary, &mut hits, &mut c);
+        for (i, (a, b)) in hits.iter().zip(&single).enumerate() {
+            assert!(
+                same_bits(*a, *b),
+                "{name}: primary ray {i}: bundle {a:?}, single {b:?}"
+            );
+        }
+        assert!(c.lane_slots > 0, "{name}: no bundle step at all: {c:?}");
+        assert!(
+            c.single_rays * 4 < primary.len() as u64,
+            "{name}: {} of {} primary rays finished alone",
+            c.single_rays,
+            primary.len()
+        );
+        let blocked: Vec<bool> = shadow.iter().map(|r| accel.occluded(r)).collect();
+        let mut got = vec![false; shadow.len()];
+        let mut c = Counters::default();
+        accel.occluded_bundle_with(&shadow, &mut got, &mut c);
+        assert_eq!(got, blocked, "{name}: shadow rays");
+        assert!(
+            c.lane_slots > 0,
+            "{name}: no shadow bundle step at all: {c:?}"
+        );
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -47,7 +47,9 @@ pub use rt_core;
 mod bundles;
 mod instances;
 mod refit;
-pub use bundles::{BUNDLE_SIZES, bundle_orders, compare_bundles, same_bits};
+pub use bundles::{
+    BUNDLE_SIZES, bundle_orders, check_coherent_bundles, compare_bundles, same_bits,
+};
 pub use instances::{
     BottomBuilder, InstancedCase, Placement, TWO_LEVEL_SCENES, check_two_level_case,
     check_two_level_random, check_two_level_scene, two_level_scene,

@@ -28,7 +28,7 @@
 //! Primitive tests count once per lane and primitive, as single rays count them. A ray a bundle
 //! finishes alone (see [`Stats::single_ray`]) counts as a single ray.
 
-pub use crate::lanes::Lanes;
+pub use crate::lanes::{LANE_MAILBOX, LaneMailbox, Lanes, test_primitives};
 pub use crate::simd::Isa;
 use crate::{Aabb, Accel, Hit, NoStats, Ray, SLAB_FAR_SCALE, Stats};
 use glam::Vec3;
@@ -261,6 +261,62 @@ pub fn for_each_bundle(rays: &[Ray], mut visit: impl FnMut(Group<'_>)) {
             }
         }
     }
+}
+
+/// The frame of a structure's own bundle queries: the first `slots` rays split by
+/// [`for_each_bundle`]; each bundle of two or more lanes that `coherent` accepts walked by
+/// `walk` (which records hits in its [`Lanes`] and returns the lanes it leaves to single rays),
+/// every other ray traced by `single`. Calls `answer(slot, hit)` for every ray, each ray counted
+/// as [`Stats::single_ray`] when traced singly. For `ANY`, a lane's answer is `Some` (with a NaN
+/// `t`, as the single any-hit walks give) when it is blocked.
+pub fn walk_groups<S: Stats, const ANY: bool>(
+    rays: &[Ray],
+    slots: usize,
+    stats: &mut S,
+    mut single: impl FnMut(&Ray, &mut S) -> Option<Hit>,
+    coherent: impl Fn(&Bundle) -> bool,
+    mut walk: impl FnMut(&Bundle, &mut Lanes, &mut S) -> u64,
+    mut answer: impl FnMut(usize, Option<Hit>),
+) {
+    let rays = &rays[..rays.len().min(slots)];
+    let mut alone = |ray: &Ray, stats: &mut S| {
+        stats.single_ray();
+        single(ray, stats)
+    };
+    if rays.len() < 2 {
+        for (slot, ray) in rays.iter().enumerate() {
+            answer(slot, alone(ray, stats));
+        }
+        return;
+    }
+    for_each_bundle(rays, |group| match group {
+        Group::Bundle(b) if b.len() > 1 && coherent(b) => {
+            let mut lanes = Lanes::new(b);
+            let left = walk(b, &mut lanes, stats);
+            for i in 0..b.len() {
+                let slot = b.slot[i] as usize;
+                if left >> i & 1 != 0 {
+                    answer(slot, alone(&lanes.rays[i], stats));
+                } else {
+                    let hit = lanes.hit(i);
+                    answer(
+                        slot,
+                        if ANY {
+                            hit.map(|h| Hit { t: f32::NAN, ..h })
+                        } else {
+                            hit
+                        },
+                    );
+                }
+            }
+        }
+        Group::Bundle(b) => {
+            for i in 0..b.len() {
+                answer(b.slot[i] as usize, alone(&b.ray(i), stats));
+            }
+        }
+        Group::Single(slot, ray) => answer(slot, alone(ray, stats)),
+    });
 }
 
 /// The default bundle queries' loop: [`Accel::intersect_with`] for each ray into the same slot

@@ -10,13 +10,19 @@
 //! being tested again.
 //!
 //! # Exact
-//! Each lane answers exactly as its single ray: every hit a lane records is a true hit of its
-//! own test ([`Lanes`] runs each lane's own arithmetic), and the closest of them, ties to the
-//! smaller index, is the single ray's answer as long as the bundle tests, for each lane, every
-//! primitive that lane's DDA walk tests before it stops. It does more: a lane's rectangle holds
-//! every cell whose closed box its segment meets, with the segment's ends widened by a bound on
-//! their rounding error ([`segment_span`]), and the walk stops a lane only after the slice whose
-//! far side lies beyond its best hit, as the DDA stops after the cell.
+//! Each lane answers exactly as its single ray. Every hit a lane records is a true hit of its
+//! own test ([`Lanes`] runs each lane's own arithmetic), so the closest of them (ties to the
+//! smaller index) is the single ray's answer, the closest true hit, which the conformance kit
+//! checks the single walk finds, as long as the bundle tests, for each lane, the primitives
+//! listed in every cell whose closed box the lane's line meets before its best hit. It does: a
+//! slice's rectangle holds every cell whose box a crossing lane's line meets between the
+//! slice's planes, its coordinates widened by a bound on their rounding error and its cells
+//! found by comparison with the builder's planes; each lane starts one slice before the first
+//! cell of its single walk; and a lane stops only at a slice whose near plane lies beyond its
+//! best hit, as the single walk stops after the cell it leaves beyond it.
+//!
+//! The hierarchical grid (rt-hgrid) walks each of its levels with the same [`walk_slices`] and
+//! [`test_primitives`].
 //!
 //! # When single rays are cheaper
 //! A rectangle much wider than its lanes (rays that spread, or an incoherent set) makes every
@@ -27,15 +33,15 @@
 use crate::Grid;
 use crate::cell::GridShape;
 use crate::dda::{Dda, RayAxes};
-use rt_core::bundle::{BUNDLE_LANES, Bundle, Group, Lanes};
+use rt_core::bundle::{BUNDLE_LANES, Bundle, LaneMailbox, Lanes, test_primitives};
 use rt_core::{Hit, Primitive, Ray, SLAB_FAR_SCALE, Stats};
 
 /// The most cells per slice a bundle's rectangle may widen by, summed over its two axes, for the
-/// bundle to walk together ([`Frame::coherent`]).
-const MAX_SPREAD: f32 = 1.0;
-
-/// Mailbox slots per bundle (see [`Mailbox`]).
-const MAILBOX: usize = 128;
+/// bundle to walk together ([`coherent`]).
+// PERF: without this test, incoherent rays (`compare --rays incoherent --bundle 8x8 -j 1`) ran
+// at 0.11-0.17x their single rays on four scenes (bundles that fell back only after walking
+// slices); with it at 0.93-0.99x, primary and shadow rays unchanged within noise.
+pub const MAX_SPREAD: f32 = 1.0;
 
 /// A bundle keeps walking while its cost so far (cells of its rectangles times the vector steps
 /// their tests take) is at most this many times what single rays would have cost (the cells each
@@ -50,65 +56,29 @@ const COST_SLACK: f32 = 16.0;
 type Span = (u32, u32);
 
 impl<P: Primitive> Grid<P> {
-    /// The bundle queries: [`for_each_bundle`](rt_core::bundle::for_each_bundle) groups,
-    /// each bundle of two or more lanes walked slice by slice, every other ray walked alone.
-    /// Calls `answer(slot, hit)` for each of the first `slots` rays (for `ANY`, `Some` when the
-    /// ray is blocked).
+    /// The bundle queries ([`walk_groups`](rt_core::bundle::walk_groups)): each coherent
+    /// bundle walked slice by slice, every other ray walked alone. Calls `answer(slot, hit)`
+    /// for each of the first `slots` rays (for `ANY`, `Some` when the ray is blocked).
     pub(crate) fn bundle_query<S: Stats, const ANY: bool>(
         &self,
         rays: &[Ray],
         slots: usize,
         stats: &mut S,
-        mut answer: impl FnMut(usize, Option<Hit>),
+        answer: impl FnMut(usize, Option<Hit>),
     ) {
-        let rays = &rays[..rays.len().min(slots)];
-        if rays.len() < 2 || self.refs.is_empty() {
-            for (slot, ray) in rays.iter().enumerate() {
-                stats.single_ray();
-                answer(slot, self.walk::<S, ANY>(ray, stats));
-            }
-            return;
-        }
-        {
-            rt_core::bundle::for_each_bundle(rays, |group| match group {
-                Group::Bundle(b)
-                    if b.len() > 1
-                        && Frame::may_cohere(&self.shape, b)
-                        && Frame::new(&self.shape, b).coherent() =>
-                {
-                    let mut lanes = Lanes::new(b);
-                    let alone = self.slices::<S, ANY>(b, &mut lanes, stats);
-                    for i in 0..b.len() {
-                        let slot = b.slot[i] as usize;
-                        if alone >> i & 1 != 0 {
-                            stats.single_ray();
-                            answer(slot, self.walk::<S, ANY>(&lanes.rays[i], stats));
-                        } else {
-                            answer(
-                                slot,
-                                lanes
-                                    .hit(i)
-                                    .map(|h| if ANY { Hit { t: f32::NAN, ..h } } else { h }),
-                            );
-                        }
-                    }
-                }
-                Group::Bundle(b) => {
-                    for i in 0..b.len() {
-                        stats.single_ray();
-                        answer(b.slot[i] as usize, self.walk::<S, ANY>(&b.ray(i), stats));
-                    }
-                }
-                Group::Single(slot, ray) => {
-                    stats.single_ray();
-                    answer(slot, self.walk::<S, ANY>(ray, stats));
-                }
-            });
-        }
+        rt_core::bundle::walk_groups::<S, ANY>(
+            rays,
+            slots,
+            stats,
+            |ray, stats| self.walk::<S, ANY>(ray, stats),
+            |b| !self.refs.is_empty() && coherent(&self.shape, b),
+            |b, lanes, stats| self.slices::<S, ANY>(b, lanes, stats),
+            answer,
+        );
     }
 
-    /// Walks bundle `b` slice by slice along its major axis, recording hits in `lanes`.
-    /// Returns the lanes left to single rays.
+    /// Walks bundle `b` through the grid ([`walk_slices`]), testing each cell's primitives
+    /// ([`test_primitives`]). Returns the lanes left to single rays.
     #[inline(always)]
     fn slices<S: Stats, const ANY: bool>(
         &self,
@@ -116,182 +86,155 @@ impl<P: Primitive> Grid<P> {
         lanes: &mut Lanes,
         stats: &mut S,
     ) -> u64 {
-        let shape = &self.shape;
-        // Each lane's interval inside the grid's box, as its single walk computes it.
-        let mut t0 = [0.0f32; BUNDLE_LANES];
-        let mut t1 = [f32::NEG_INFINITY; BUNDLE_LANES];
-        let mut live = 0u64;
-        for i in 0..b.len() {
-            if let Some((a, z)) = shape
-                .bounds()
-                .intersect(&lanes.rays[i], lanes.rays[i].t_max)
-            {
-                (t0[i], t1[i]) = (a, z);
-                live |= 1 << i;
-            }
+        let mut mailbox = LaneMailbox::new();
+        let walking = b.all_lanes();
+        let walked = walk_slices(
+            &self.shape,
+            b,
+            lanes,
+            walking,
+            |lanes, c, lanes_in, t_hi| {
+                stats.node_visit();
+                stats.bundle_lanes(b.len() as u32, lanes_in.count_ones());
+                let i = self.shape.index(c);
+                let ids = &self.refs[self.cells[i] as usize..self.cells[i + 1] as usize];
+                test_primitives::<P, S, ANY>(
+                    &self.prims,
+                    ids,
+                    (b, t_hi),
+                    lanes,
+                    lanes_in,
+                    &mut mailbox,
+                    stats,
+                )
+            },
+        );
+        walked.alone
+    }
+}
+
+/// Whether bundle `b`'s lanes travel together through `shape` closely enough for
+/// [`walk_slices`]: their rectangle widens by at most [`MAX_SPREAD`] cells per slice. Rays of a
+/// camera's pixel tile, or shadow rays towards one light, do; rays in random directions do not,
+/// and go singly.
+pub fn coherent(shape: &GridShape, b: &Bundle) -> bool {
+    Frame::may_cohere(shape, b) && Frame::new(shape, b).coherent()
+}
+
+/// What [`walk_slices`] leaves to its caller: the lanes that missed the grid's box, and the
+/// lanes to finish as single rays because the bundle would cost more than they.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Walked {
+    /// Lanes of the walk whose slab test against the grid's box failed.
+    pub missed: u64,
+    /// Lanes to finish as single rays.
+    pub alone: u64,
+}
+
+/// The slice walk of coherent grid traversal: the lanes `walking` of bundle `b` through
+/// `shape`, slice by slice along their major axis. For each cell of each slice's rectangle,
+/// `visit(lanes, cell, crossing, t_hi)` tests the cell's primitives against the lanes `crossing`
+/// the slice (every lane's best hit so far is at most `t_hi`) and returns the lanes that leave
+/// the walk (blocked, for any-hit queries; none otherwise).
+///
+/// Lanes that miss the grid's box are not walked (for the top grid they are done, as their
+/// single walks are).
+#[inline(always)]
+pub fn walk_slices(
+    shape: &GridShape,
+    b: &Bundle,
+    lanes: &mut Lanes,
+    walking: u64,
+    mut visit: impl FnMut(&mut Lanes, [u32; 3], u64, f32) -> u64,
+) -> Walked {
+    // Each lane's interval inside the grid's box, as its single walk computes it.
+    let mut t0 = [0.0f32; BUNDLE_LANES];
+    let mut t1 = [f32::NEG_INFINITY; BUNDLE_LANES];
+    let mut live = 0u64;
+    let mut m = walking;
+    while m != 0 {
+        let i = m.trailing_zeros() as usize;
+        m &= m - 1;
+        if let Some((a, z)) = shape
+            .bounds()
+            .intersect(&lanes.rays[i], lanes.rays[i].t_max)
+        {
+            (t0[i], t1[i]) = (a, z);
+            live |= 1 << i;
         }
+    }
+    let mut walked = Walked {
+        missed: walking & !live,
+        alone: 0,
+    };
+    if live == 0 {
+        return walked;
+    }
+    let frame = Frame::new(shape, b);
+    let res = shape.resolution_per_axis();
+    let (start, mut s) = start_slices(shape, lanes, frame.major, &t0, live, frame.forward);
+    // What the bundle has cost so far and what single rays would have: cells times vector
+    // steps, against the cells the lanes cross one by one.
+    let (mut cost, mut single_cost) = (0.0f32, 0.0f32);
+    loop {
+        let (near, far) = if frame.forward {
+            (s, s + 1)
+        } else {
+            (s + 1, s)
+        };
+        let planes = (
+            s,
+            shape.plane(frame.major, near),
+            shape.plane(frame.major, far),
+        );
+        let cut = frame.slice(planes, b, lanes.best_t(), &start, &t1, live);
+        live &= !cut.done;
         if live == 0 {
-            return 0;
+            return walked;
         }
-        let frame = Frame::new(shape, b);
-        let res = shape.resolution_per_axis();
-        let (start, mut s) = start_slices(shape, lanes, frame.major, &t0, live, frame.forward);
-        let mut mailbox = Mailbox::new();
-        // What the bundle has cost so far and what single rays would have: cells times vector
-        // steps, against the cells the lanes cross one by one.
-        let (mut cost, mut single_cost) = (0.0f32, 0.0f32);
-        loop {
-            let (near, far) = if frame.forward {
-                (s, s + 1)
-            } else {
-                (s + 1, s)
-            };
-            let cut = frame.slice(
-                (
-                    s,
-                    shape.plane(frame.major, near),
-                    shape.plane(frame.major, far),
-                ),
-                b,
-                lanes.best_t(),
-                &start,
-                &t1,
-                live,
-            );
-            live &= !cut.done;
-            if live == 0 {
-                return 0;
+        let crossing = cut.crossing & live;
+        if crossing != 0 {
+            let us = frame.span(shape, frame.u, cut.u);
+            let vs = frame.span(shape, frame.v, cut.v);
+            let cells = ((us.1 - us.0 + 1) * (vs.1 - vs.0 + 1)) as f32;
+            let steps = crossing.to_le_bytes().iter().filter(|&&x| x != 0).count() as f32;
+            cost += cells * steps;
+            single_cost += crossing.count_ones() as f32 * frame.cells_per_lane;
+            if cost > MAX_COST_RATIO * single_cost + COST_SLACK {
+                walked.alone = live;
+                return walked;
             }
-            let crossing = cut.crossing & live;
-            if crossing != 0 {
-                let us = frame.span(shape, frame.u, cut.u);
-                let vs = frame.span(shape, frame.v, cut.v);
-                let cells = ((us.1 - us.0 + 1) * (vs.1 - vs.0 + 1)) as f32;
-                let steps = crossing.to_le_bytes().iter().filter(|&&x| x != 0).count() as f32;
-                cost += cells * steps;
-                single_cost += crossing.count_ones() as f32 * frame.cells_per_lane;
-                if cost > MAX_COST_RATIO * single_cost + COST_SLACK {
-                    return live;
-                }
-                // Every lane's best hit so far is at most this (lanes only get closer).
-                let t_hi = lanes
-                    .best_t()
-                    .iter()
-                    .fold(f32::NEG_INFINITY, |a, &t| a.max(t));
-                let mut lanes_in = crossing;
-                for cv in vs.0..=vs.1 {
-                    for cu in us.0..=us.1 {
-                        let mut c = [0u32; 3];
-                        (c[frame.major], c[frame.u], c[frame.v]) = (s, cu, cv);
-                        let blocked = self.bundle_cell::<S, ANY>(
-                            c,
-                            (b, t_hi),
-                            lanes,
-                            lanes_in,
-                            &mut mailbox,
-                            stats,
-                        );
-                        live &= !blocked;
-                        lanes_in &= !blocked;
-                        if live == 0 {
-                            return 0;
-                        }
+            // Every lane's best hit so far is at most this (lanes only get closer).
+            let t_hi = lanes
+                .best_t()
+                .iter()
+                .fold(f32::NEG_INFINITY, |a, &t| a.max(t));
+            let mut lanes_in = crossing;
+            for cv in vs.0..=vs.1 {
+                for cu in us.0..=us.1 {
+                    let mut c = [0u32; 3];
+                    (c[frame.major], c[frame.u], c[frame.v]) = (s, cu, cv);
+                    let blocked = visit(lanes, c, lanes_in, t_hi);
+                    live &= !blocked;
+                    lanes_in &= !blocked;
+                    if live == 0 {
+                        return walked;
                     }
                 }
             }
-            // The next slice, if the grid has one.
-            if frame.forward {
-                if s + 1 >= res[frame.major] {
-                    return 0;
-                }
-                s += 1;
-            } else {
-                if s == 0 {
-                    return 0;
-                }
-                s -= 1;
-            }
         }
-    }
-
-    /// Tests the primitives of cell `c` against the lanes of `lanes_in` that the mailbox does
-    /// not show tested already, skipping those whose box no lane of `b` can enter before
-    /// `t_hi`; returns the lanes blocked (for `ANY`; none otherwise).
-    ///
-    /// The skip is Wald et al.'s frustum culling of triangles, with [`Bundle::may_enter`]'s
-    /// interval bound as the frustum: a lane that hits a primitive enters its box at or before
-    /// the hit, which its slab test finds (the test a BVH culls with), and the bound is
-    /// conservative for every lane's slab test.
-    #[inline(always)]
-    fn bundle_cell<S: Stats, const ANY: bool>(
-        &self,
-        c: [u32; 3],
-        (b, t_hi): (&Bundle, f32),
-        lanes: &mut Lanes,
-        mut lanes_in: u64,
-        mailbox: &mut Mailbox,
-        stats: &mut S,
-    ) -> u64 {
-        stats.node_visit();
-        stats.bundle_lanes(b.len() as u32, lanes_in.count_ones());
-        let mut blocked = 0;
-        let i = self.shape.index(c);
-        for &id in &self.refs[self.cells[i] as usize..self.cells[i + 1] as usize] {
-            let untested = mailbox.untested(id, lanes_in);
-            for _ in 0..(lanes_in & !untested).count_ones() {
-                stats.mailbox_skip();
+        // The next slice, if the grid has one.
+        if frame.forward {
+            if s + 1 >= res[frame.major] {
+                return walked;
             }
-            if untested == 0 {
-                continue;
+            s += 1;
+        } else {
+            if s == 0 {
+                return walked;
             }
-            let prim = &self.prims[id as usize];
-            if !b.may_enter(&prim.bounds(), t_hi) {
-                continue;
-            }
-            if ANY {
-                let hit = lanes.occluded(prim, id, untested, stats);
-                blocked |= hit;
-                lanes_in &= !hit;
-                if lanes_in == 0 {
-                    break;
-                }
-            } else {
-                lanes.intersect(prim, id, untested, stats);
-            }
+            s -= 1;
         }
-        blocked
-    }
-}
-
-/// A bundle's mailbox: for the last primitive seen in each slot (its index modulo [`MAILBOX`]),
-/// the lanes it was tested against. A primitive met again in a later cell of the rectangle or a
-/// later slice is tested only against lanes it was not tested against; a slot taken over by
-/// another primitive only costs a second test, never a wrong answer.
-struct Mailbox {
-    ids: [u32; MAILBOX],
-    tested: [u64; MAILBOX],
-}
-
-impl Mailbox {
-    fn new() -> Self {
-        Self {
-            ids: [u32::MAX; MAILBOX],
-            tested: [0; MAILBOX],
-        }
-    }
-
-    /// The lanes of `lanes` that primitive `id` has not been tested against; records them as
-    /// tested.
-    #[inline(always)]
-    fn untested(&mut self, id: u32, lanes: u64) -> u64 {
-        let k = id as usize % MAILBOX;
-        if self.ids[k] != id {
-            self.ids[k] = id;
-            self.tested[k] = 0;
-        }
-        let new = lanes & !self.tested[k];
-        self.tested[k] |= lanes;
-        new
     }
 }
 
@@ -448,9 +391,7 @@ impl Frame {
         spread <= MAX_SPREAD
     }
 
-    /// Whether the lanes travel together: their rectangle widens by at most [`MAX_SPREAD`]
-    /// cells per slice. Rays of a camera's pixel tile, or shadow rays towards one light, do;
-    /// rays in random directions do not, and go singly at once.
+    /// Whether the lanes' rectangle widens by at most [`MAX_SPREAD`] cells per slice.
     fn coherent(&self) -> bool {
         self.spread <= MAX_SPREAD
     }

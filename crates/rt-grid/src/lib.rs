@@ -90,7 +90,7 @@
 #![warn(missing_docs)]
 
 mod builder;
-mod bundle;
+pub mod bundle;
 mod cell;
 pub mod dda;
 pub mod nearest;

@@ -33,6 +33,14 @@
 //! in several cells once, and where two boundaries are crossed within rounding of each other the
 //! cells beside the path are tested too — a parent cell there by its whole list.
 //!
+//! # Bundles
+//! [`Accel::intersect_bundle`] and [`Accel::occluded_bundle`] trace coherent rays together by
+//! `rt-grid`'s coherent grid traversal (Wald et al. 2006, [`rt_grid::bundle`]) on each level:
+//! slice by slice through the top grid and, at a cell holding a nested grid, through that grid
+//! with the lanes that cross the cell, each primitive tested once per bundle against all its
+//! lanes, eight per vector step, and skipped when no lane can enter its box. Each ray answers
+//! exactly as its single-ray query.
+//!
 //! # Closest points
 //! [`Accel::closest_point`] visits the top grid's cells in growing
 //! shells around the point (`rt_grid::nearest::shells`), and a cell's nested grid the same way
@@ -70,6 +78,7 @@
 #![warn(missing_docs)]
 
 mod builder;
+mod bundle;
 mod nearest;
 mod node;
 mod regions;
@@ -211,6 +220,23 @@ impl<P: Primitive> Accel for HGrid<P> {
     #[inline]
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
         self.walk::<S, true>(ray, stats).is_some()
+    }
+
+    /// Coherent grid traversal, level by level (`bundle.rs`).
+    fn intersect_bundle_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        stats: &mut S,
+    ) {
+        self.bundle_query::<S, false>(rays, out.len(), stats, |slot, hit| out[slot] = hit);
+    }
+
+    /// Coherent grid traversal, level by level (`bundle.rs`).
+    fn occluded_bundle_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
+        self.bundle_query::<S, true>(rays, out.len(), stats, |slot, hit| {
+            out[slot] = hit.is_some()
+        });
     }
 
     fn bounds(&self) -> rt_core::Aabb {

@@ -1,0 +1,108 @@
+//! Bundles through the hierarchy: `rt-grid`'s coherent grid traversal
+//! ([`rt_grid::bundle::walk_slices`]) on the top grid and, at a cell that holds a nested grid,
+//! on that grid, with the lanes that cross the cell's slice, recursively.
+//!
+//! Exact as the uniform grid's walk is, level by level: a nested walk covers every cell its
+//! lanes' lines meet inside the nested grid, from one slice before each lane's first cell. A
+//! lane whose slab test misses the nested grid's box (it grazes the parent cell) is tested
+//! against the parent cell's whole list instead, as the single walk tests a parent cell it
+//! passes beside. One mailbox serves the whole bundle, over all levels.
+
+use crate::HGrid;
+use rt_core::bundle::{Bundle, LaneMailbox, Lanes, test_primitives};
+use rt_core::{Hit, Primitive, Ray, Stats};
+use rt_grid::bundle::{coherent, walk_slices};
+
+impl<P: Primitive> HGrid<P> {
+    /// The bundle queries, as the uniform grid's ([`walk_groups`](rt_core::bundle::walk_groups)):
+    /// each coherent bundle walked level by level, every other ray walked alone. Calls
+    /// `answer(slot, hit)` for each of the first `slots` rays (for `ANY`, `Some` when the ray is
+    /// blocked).
+    pub(crate) fn bundle_query<S: Stats, const ANY: bool>(
+        &self,
+        rays: &[Ray],
+        slots: usize,
+        stats: &mut S,
+        answer: impl FnMut(usize, Option<Hit>),
+    ) {
+        let top = &self.levels[0].shape;
+        rt_core::bundle::walk_groups::<S, ANY>(
+            rays,
+            slots,
+            stats,
+            |ray, stats| self.walk::<S, ANY>(ray, stats),
+            |b| !self.refs.is_empty() && coherent(top, b),
+            |b, lanes, stats| {
+                let mut mailbox = LaneMailbox::new();
+                let mut alone = 0;
+                let walking = b.all_lanes();
+                let walked =
+                    self.level::<S, ANY>(0, (b, walking), lanes, &mut mailbox, &mut alone, stats);
+                alone | walked.alone
+            },
+            answer,
+        );
+    }
+
+    /// Walks the lanes `walking` of bundle `b` through grid `level`, recursing into nested
+    /// grids; lanes a nested walk leaves to single rays are added to `alone` (and leave the
+    /// walks above).
+    fn level<S: Stats, const ANY: bool>(
+        &self,
+        level: usize,
+        (b, walking): (&Bundle, u64),
+        lanes: &mut Lanes,
+        mailbox: &mut LaneMailbox,
+        alone: &mut u64,
+        stats: &mut S,
+    ) -> rt_grid::bundle::Walked {
+        let l = &self.levels[level];
+        walk_slices(&l.shape, b, lanes, walking, |lanes, c, lanes_in, t_hi| {
+            stats.node_visit();
+            stats.bundle_lanes(b.len() as u32, lanes_in.count_ones());
+            let cell = self.cells[l.first_cell + l.shape.index(c)];
+            let Some(nested) = cell.nested() else {
+                let ids = &self.refs[cell.references()];
+                return test_primitives::<P, S, ANY>(
+                    &self.prims,
+                    ids,
+                    (b, t_hi),
+                    lanes,
+                    lanes_in,
+                    mailbox,
+                    stats,
+                );
+            };
+            let walked = self.level::<S, ANY>(nested, (b, lanes_in), lanes, mailbox, alone, stats);
+            *alone |= walked.alone;
+            let mut leave = walked.alone;
+            if walked.missed != 0 {
+                // Lanes that graze the cell: its whole list, as the single walk tests a parent
+                // cell beside its path.
+                let (lo, hi) = self.levels[nested].all;
+                let ids = &self.refs[lo..hi];
+                leave |= test_primitives::<P, S, ANY>(
+                    &self.prims,
+                    ids,
+                    (b, t_hi),
+                    lanes,
+                    walked.missed,
+                    mailbox,
+                    stats,
+                );
+            }
+            if ANY {
+                // Blocked lanes in the nested walk hold a primitive now.
+                let mut m = lanes_in;
+                while m != 0 {
+                    let i = m.trailing_zeros() as usize;
+                    m &= m - 1;
+                    if lanes.hit(i).is_some() {
+                        leave |= 1 << i;
+                    }
+                }
+            }
+            leave
+        })
+    }
+}

@@ -144,6 +144,42 @@ impl Bundle {
         }
     }
 
+    /// The axis along which the first lane travels fastest (its direction's largest component;
+    /// the lowest axis on ties). Structures that walk a bundle in slices or in one child order
+    /// take it as the bundle's major axis.
+    #[inline]
+    pub fn major_axis(&self) -> usize {
+        let d = [0, 1, 2].map(|a| self.dir[a][0].abs());
+        if d[0] >= d[1] && d[0] >= d[2] {
+            0
+        } else if d[1] >= d[2] {
+            1
+        } else {
+            2
+        }
+    }
+
+    /// For the axes `major + 1` and `major + 2` (mod 3), the smallest and largest slope
+    /// `d_axis / d_major = inv_major / inv_axis` over the corners of the lanes' reciprocal
+    /// bounds: in constant time, an interval that holds every lane's slope up to rounding, and
+    /// so how far apart the lanes' directions may be.
+    #[inline]
+    pub fn slope_bounds(&self, major: usize) -> [(f32, f32); 2] {
+        let (lo, hi) = (self.inv_lo.to_array(), self.inv_hi.to_array());
+        [(major + 1) % 3, (major + 2) % 3].map(|a| {
+            let r = [
+                lo[major] / lo[a],
+                lo[major] / hi[a],
+                hi[major] / lo[a],
+                hi[major] / hi[a],
+            ];
+            r.iter()
+                .fold((f32::INFINITY, f32::NEG_INFINITY), |(x, y), &v| {
+                    (x.min(v), y.max(v))
+                })
+        })
+    }
+
     /// Lane `i` as a ray: the same bits as the ray it came from.
     #[inline]
     pub fn ray(&self, i: usize) -> Ray {

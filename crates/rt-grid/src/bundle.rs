@@ -305,14 +305,7 @@ impl Frame {
     /// The walk of bundle `b`'s lanes through `shape`: slices along the axis the first lane
     /// travels fastest (all lanes share direction signs, and no component is zero).
     fn new(shape: &GridShape, b: &Bundle) -> Self {
-        let d = [0, 1, 2].map(|a| b.dir[a][0].abs());
-        let major = if d[0] >= d[1] && d[0] >= d[2] {
-            0
-        } else if d[1] >= d[2] {
-            1
-        } else {
-            2
-        };
+        let major = b.major_axis();
         let (u, v) = ((major + 1) % 3, (major + 2) % 3);
         let mut slope = [[0.0; BUNDLE_LANES]; 2];
         let mut origin_max = [0.0f32; 2];
@@ -357,35 +350,15 @@ impl Frame {
     /// corners' ratios, so this rejects no bundle that [`Frame::coherent`] accepts, give or
     /// take rounding.
     fn may_cohere(shape: &GridShape, b: &Bundle) -> bool {
-        let lb = b.lane_bounds();
-        let (lo, hi) = (lb.inv_dir_lo.to_array(), lb.inv_dir_hi.to_array());
-        let d = [0, 1, 2].map(|a| b.dir[a][0].abs());
-        let major = if d[0] >= d[1] && d[0] >= d[2] {
-            0
-        } else if d[1] >= d[2] {
-            1
-        } else {
-            2
-        };
+        let major = b.major_axis();
         let size =
             [0, 1, 2].map(|a| shape.bounds().extent()[a] / shape.resolution_per_axis()[a] as f32);
+        let axes = [(major + 1) % 3, (major + 2) % 3];
         let mut spread = 0.0;
-        for axis in [(major + 1) % 3, (major + 2) % 3] {
+        for (axis, (lo, hi)) in axes.into_iter().zip(b.slope_bounds(major)) {
             if size[axis] > 0.0 {
-                // `inv_major / inv_axis` over the corners: the ratio's extremes, halved for the
-                // rounding a corner's ratio may carry beyond the lanes' own.
-                let r = [
-                    lo[major] / lo[axis],
-                    lo[major] / hi[axis],
-                    hi[major] / lo[axis],
-                    hi[major] / hi[axis],
-                ];
-                let (a, z) = r
-                    .iter()
-                    .fold((f32::INFINITY, f32::NEG_INFINITY), |(a, z), &x| {
-                        (a.min(x), z.max(x))
-                    });
-                spread += 0.5 * (z - a) * size[major] / size[axis];
+                // Halved for the rounding a corner's ratio may carry beyond the lanes' own.
+                spread += 0.5 * (hi - lo) * size[major] / size[axis];
             }
         }
         spread <= MAX_SPREAD

@@ -7,7 +7,7 @@ use rt_grid::{Grid, GridParams};
 
 #[test]
 fn coherent_bundles_walk_together_and_answer_as_single_rays() {
-    rt_conformance::check_coherent_bundles::<Grid<Triangle>>(&GridParams::standard());
+    rt_conformance::check_coherent_bundles::<Grid<Triangle>>(&GridParams::standard(), true);
 }
 
 /// A ray that grazes the grid's corner at its closest hit, found by proptest: its computed entry

@@ -62,6 +62,25 @@ impl Ray {
         }
     }
 
+    /// A ray from parts taken from another ray (its reciprocal included), as a bundle keeps
+    /// them: no division, the same bits.
+    #[inline(always)]
+    pub(crate) fn from_parts(
+        origin: Vec3,
+        dir: Vec3,
+        inv_dir: Vec3,
+        t_min: f32,
+        t_max: f32,
+    ) -> Self {
+        Self {
+            origin,
+            dir,
+            inv_dir,
+            t_min,
+            t_max,
+        }
+    }
+
     /// The same ray with direction `dir` (and its reciprocal recomputed).
     ///
     /// ```

@@ -71,7 +71,11 @@ impl<P: Primitive> Grid<P> {
             slots,
             stats,
             |ray, stats| self.walk::<S, ANY>(ray, stats),
-            |b| !self.refs.is_empty() && coherent(&self.shape, b),
+            |b| {
+                b.route(&self.shape.bounds(), |b| {
+                    !self.refs.is_empty() && coherent(&self.shape, b)
+                })
+            },
             |b, lanes, stats| self.slices::<S, ANY>(b, lanes, stats),
             answer,
         );

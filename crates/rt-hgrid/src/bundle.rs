@@ -31,7 +31,7 @@ impl<P: Primitive> HGrid<P> {
             slots,
             stats,
             |ray, stats| self.walk::<S, ANY>(ray, stats),
-            |b| !self.refs.is_empty() && coherent(top, b),
+            |b| b.route(&top.bounds(), |b| !self.refs.is_empty() && coherent(top, b)),
             |b, lanes, stats| {
                 let mut mailbox = LaneMailbox::new();
                 let mut alone = 0;

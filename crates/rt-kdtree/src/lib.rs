@@ -60,6 +60,21 @@
 //!
 //! Any-hit queries return at the first hit in the ray's interval.
 //!
+//! # Bundles
+//! [`Accel::intersect_bundle`] and [`Accel::occluded_bundle`] trace coherent rays as packets
+//! (Wald 2004, §7): the lanes of a bundle share their direction signs, so one child order at
+//! every plane is front to back for all of them. Each stack entry carries its node's cell and
+//! the lanes that entered its parent; the walk tests the first of those lanes against the cell
+//! with its own slab test and, when it fails, all of them eight per vector step, with each
+//! lane's best hit so far, so lanes that have hit drop out (the first-active-lane rule of Wald,
+//! Boulos & Shirley 2007). One interval test over the bundle culls a cell for all lanes at
+//! once, and a leaf tests its primitives against its lanes with the single ray's watertight
+//! arithmetic, eight lanes per vector step (`bundle.rs`). Lanes that disagree at a plane need no
+//! special case: each child is entered by the lanes whose test reaches its cell, and a lane in
+//! the plane reaches both, as the single walk's in-plane rule has it. Every ray answers exactly
+//! as its single-ray query does, whichever [`Traversal`] that uses. Bundles whose directions
+//! spread more than [`MAX_SPREAD`] go singly.
+//!
 //! # Closest points
 //! [`Accel::closest_point`] descends the near side of each plane
 //! first and goes to the far side only while the query's ball reaches across it; each stack entry
@@ -105,12 +120,14 @@
 #![warn(missing_docs)]
 
 mod builder;
+mod bundle;
 mod nearest;
 mod node;
 mod regions;
 mod traverse;
 mod validate;
 
+pub use bundle::MAX_SPREAD;
 pub use node::Node;
 pub use rt_core::ValidationError;
 
@@ -274,6 +291,19 @@ impl<P: Primitive> KdTree<P> {
         self.traversal
     }
 
+    /// One ray by the tree's traversal: the closest hit, or for `ANY` a hit (`Some`) if any.
+    #[inline(always)]
+    fn single<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        // Outside the precondition (NaN, huge origins, ...): answer at once, walk nothing.
+        if !ray.is_valid() {
+            return None;
+        }
+        match self.traversal {
+            Traversal::Stack => self.traverse_stack::<S, ANY>(ray, stats),
+            Traversal::Restart => self.traverse_restart::<S, ANY>(ray, stats),
+        }
+    }
+
     /// Switches the traversal; the tree is the same for both.
     pub fn set_traversal(&mut self, traversal: Traversal) {
         self.traversal = traversal;
@@ -326,26 +356,30 @@ impl<P: Primitive> Accel for KdTree<P> {
 
     #[inline]
     fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        // Outside the precondition (NaN, huge origins, ...): answer at once, walk nothing.
-        if !ray.is_valid() {
-            return None;
-        }
-        match self.traversal {
-            Traversal::Stack => self.traverse_stack::<S, false>(ray, stats),
-            Traversal::Restart => self.traverse_restart::<S, false>(ray, stats),
-        }
+        self.single::<S, false>(ray, stats)
     }
 
     #[inline]
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        if !ray.is_valid() {
-            return false;
-        }
-        match self.traversal {
-            Traversal::Stack => self.traverse_stack::<S, true>(ray, stats),
-            Traversal::Restart => self.traverse_restart::<S, true>(ray, stats),
-        }
-        .is_some()
+        self.single::<S, true>(ray, stats).is_some()
+    }
+
+    /// Packet traversal in the bundle's direction octant (`bundle.rs`).
+    fn intersect_bundle_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        stats: &mut S,
+    ) {
+        self.bundle_query::<S, false>(rays, out.len(), stats, |slot, hit| out[slot] = hit);
+    }
+
+    /// Packet traversal in the bundle's direction octant (`bundle.rs`); a lane leaves at its
+    /// first hit.
+    fn occluded_bundle_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
+        self.bundle_query::<S, true>(rays, out.len(), stats, |slot, hit| {
+            out[slot] = hit.is_some()
+        });
     }
 
     fn bounds(&self) -> Aabb {

@@ -21,7 +21,7 @@
 use crate::Octree;
 use crate::builder::MAX_DEPTH;
 use crate::node::{Node, child_box, midpoint};
-use rt_core::bundle::{Bundle, LaneMailbox, Lanes, test_primitives};
+use rt_core::bundle::{Bundle, LaneMailbox, Lanes, narrow, test_primitives};
 use rt_core::{Aabb, Hit, Primitive, Ray, Stats};
 
 /// The most the lanes' slopes across their major axis may spread, summed over the two other
@@ -46,7 +46,7 @@ impl<P: Primitive> Octree<P> {
             slots,
             stats,
             |ray, stats| self.walk::<S, ANY>(ray, stats),
-            |b| !self.refs.is_empty() && coherent(b),
+            |b| b.route(&self.bounds, |b| !self.refs.is_empty() && coherent(b)),
             |b, lanes, stats| {
                 self.packet::<S, ANY>(b, lanes, stats);
                 0
@@ -60,23 +60,25 @@ impl<P: Primitive> Octree<P> {
     fn packet<S: Stats, const ANY: bool>(&self, b: &Bundle, lanes: &mut Lanes, stats: &mut S) {
         let mut mailbox = LaneMailbox::new();
         let flip = b.octant();
-        let mut stack = [(Node::leaf(0, 0), Aabb::EMPTY); STACK];
-        stack[0] = (self.root, self.bounds);
+        let mut stack = [(Node::leaf(0, 0), 0u64, Aabb::EMPTY); STACK];
+        stack[0] = (self.root, b.all_lanes(), self.bounds);
         let mut sp = 1;
         let mut live = b.all_lanes();
+        // Every lane's best hit so far is at most this (lanes only get closer).
+        let mut t_hi = lanes.far_end();
         while sp > 0 {
             sp -= 1;
-            let (node, bx) = stack[sp];
+            let (node, entered, bx) = stack[sp];
             if node.is_empty_leaf() {
                 continue;
             }
-            // Every live lane's best hit so far is at most this (lanes only get closer).
-            let t_hi = far_end(lanes, live);
-            if !b.may_enter(&bx, t_hi) {
+            let leaf = node.children().is_none();
+            let active = narrow(b, lanes, &bx, entered & live, t_hi, leaf);
+            if active == 0 {
                 continue;
             }
             stats.node_visit();
-            stats.bundle_lanes(b.len() as u32, live.count_ones());
+            stats.bundle_lanes(b.len() as u32, active.count_ones());
             match node.children() {
                 Some(block) => {
                     let mid = midpoint(&bx);
@@ -84,53 +86,32 @@ impl<P: Primitive> Octree<P> {
                     // Pushed far to near, so the nearest child in ray order comes off first.
                     for k in (0..8).rev() {
                         let i = k ^ flip;
-                        stack[sp] = (children[i], child_box(&bx, mid, i));
+                        stack[sp] = (children[i], active, child_box(&bx, mid, i));
                         sp += 1;
                     }
                 }
                 None => {
                     let ids = &self.refs[node.references()];
-                    let t = (b, t_hi);
                     live &= !test_primitives::<P, S, ANY>(
                         &self.prims,
                         ids,
-                        t,
+                        (b, t_hi),
                         lanes,
-                        live,
+                        active,
                         &mut mailbox,
                         stats,
                     );
                     if live == 0 {
                         return;
                     }
+                    t_hi = lanes.far_end();
                 }
             }
         }
     }
 }
 
-/// The largest best `t` of the `live` lanes.
-#[inline(always)]
-fn far_end(lanes: &Lanes, live: u64) -> f32 {
-    let mut t = f32::NEG_INFINITY;
-    let mut m = live;
-    while m != 0 {
-        let i = m.trailing_zeros() as usize;
-        m &= m - 1;
-        t = t.max(lanes.t(i));
-    }
-    t
-}
-
-/// Whether the lanes' directions stay within [`MAX_SPREAD`] of each other, from the bundle's
-/// bounds alone (constant time, so rays in random directions cost little before they go
-/// singly): the spread of the slopes `d_a / d_major = inv_major / inv_a` over the corners of the
-/// reciprocals' intervals, summed over the two minor axes.
+/// Whether the lanes' directions stay within [`MAX_SPREAD`] of each other.
 fn coherent(b: &Bundle) -> bool {
-    let spread: f32 = b
-        .slope_bounds(b.major_axis())
-        .iter()
-        .map(|(lo, hi)| hi - lo)
-        .sum();
-    spread <= MAX_SPREAD
+    b.direction_spread() <= MAX_SPREAD
 }

@@ -833,7 +833,7 @@ mod tests {
         ]);
         let mut entries: Vec<_> = structures::all()
             .into_iter()
-            .filter(|e| e.name == "bvh" || e.name == "kdtree")
+            .filter(|e| e.name == "bvh" || e.name == "bvh-binary")
             .collect();
         entries.push(structures::entry_of::<
             BundlesLoseEvenHits<Triangle>,
@@ -841,7 +841,7 @@ mod tests {
         >());
         let report = measure(&a, 1, entries).unwrap();
         let row = |name: &str| report.rows.iter().find(|r| r.name == name).unwrap();
-        let (bvh, kdtree, broken) = (row("bvh"), row("kdtree"), row("bundles-broken"));
+        let (bvh, binary, broken) = (row("bvh"), row("bvh-binary"), row("bundles-broken"));
         let even = bvh
             .answers
             .iter()
@@ -852,13 +852,13 @@ mod tests {
         assert_eq!(broken.mismatches, 0);
         assert_eq!(broken.bundle.as_ref().unwrap().differences, even);
         assert_eq!(report.total_mismatches(), even);
-        // The wide tree traces bundles (its lanes counted); the kd-tree, without a bundle
+        // The wide tree traces bundles (its lanes counted); the binary tree, without a bundle
         // traversal, traces every ray alone.
         let b = bvh.bundle.as_ref().unwrap();
         assert_eq!(b.differences, 0);
         assert!(b.lane_utilisation.is_some_and(|u| u > 0.0 && u <= 1.0));
         assert!(b.avg_visits < bvh.avg_visits, "a bundle's step counts once");
-        let k = kdtree.bundle.as_ref().unwrap();
+        let k = binary.bundle.as_ref().unwrap();
         assert_eq!((k.single_share, k.lane_utilisation), (1.0, None));
         let table = to_table(&report);
         assert!(

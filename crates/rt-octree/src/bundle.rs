@@ -2,11 +2,14 @@
 //!
 //! All lanes of a bundle share their direction signs, so one child order is front to back for
 //! every lane: child `k` in ray order (bit `a` set for the far half along axis `a`) is child
-//! `k ^ octant` of the block. The walk keeps one stack for the whole bundle and culls a node for
-//! all lanes at once when none can enter its box before the farthest best hit of the bundle
-//! ([`Bundle::may_enter`], an interval bound that is conservative for every lane's slab test).
-//! A leaf's primitives are tested against the live lanes, eight per vector step, each skipped
-//! when no lane can enter its box ([`test_primitives`]), with one mailbox for the bundle.
+//! `k ^ octant` of the block. The walk keeps one stack for the whole bundle, each entry with
+//! the lanes that entered its parent, narrowed at each node ([`narrow`]): the first of them
+//! tested against the node's box with its own slab test and, when it fails and at every leaf,
+//! all of them with theirs; a node none can enter before the farthest best hit of the bundle is
+//! culled for all at once ([`Bundle::may_enter`], an interval bound that is conservative for
+//! every lane's slab test). A leaf's primitives are tested against its lanes, eight per vector
+//! step, each skipped when no lane can enter its box ([`test_primitives`]), with one mailbox
+//! for the bundle. Any-hit lanes leave at their first hit.
 //!
 //! Exact: a lane's closest true hit lies in the closed box of a leaf that lists its primitive
 //! (the builder lists a primitive in every child it reaches, with a margin); the lane's slab
@@ -15,8 +18,8 @@
 //! of them (ties to the smaller index) is the single walk's answer. The child boxes come from
 //! the builder's own midpoints.
 //!
-//! Bundles whose directions spread more than [`MAX_SPREAD`] go singly: with no per-lane
-//! intervals, a spread bundle visits the union of its lanes' nodes.
+//! Bundles whose directions spread more than [`MAX_SPREAD`] go singly: their lanes share few
+//! nodes.
 
 use crate::Octree;
 use crate::builder::MAX_DEPTH;

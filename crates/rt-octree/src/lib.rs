@@ -73,13 +73,15 @@
 //! for a scene, with the uniform grid as the first row.
 //!
 //! # Bundles
-//! [`Accel::intersect_bundle`] traces coherent rays as packets:
+//! [`Accel::intersect_bundle`] and [`Accel::occluded_bundle`] trace coherent rays as packets:
 //! the lanes of a bundle share their direction octant, so one child order is front to back for
-//! all of them, and the walk culls a node for the whole bundle with one interval test
-//! ([`Bundle::may_enter`](rt_core::Bundle::may_enter)), testing a leaf's primitives against
-//! all live lanes, eight per vector step. Bundles whose directions spread go singly. Each ray
-//! answers exactly as its single-ray query. [`Accel::occluded_bundle`] loops over single rays:
-//! shadow rays from spread surface points make the packet's bound too loose to pay.
+//! all of them. Each stack entry carries the lanes that entered its parent; the first of them
+//! is tested against the node's box with its own slab test and, when it fails (and at leaves),
+//! all of them, eight per vector step, so lanes that have hit drop out; one interval test
+//! ([`Bundle::may_enter`](rt_core::Bundle::may_enter)) culls a box for the whole bundle. A
+//! leaf's primitives are tested against its lanes with the single ray's watertight arithmetic,
+//! eight lanes per vector step (`bundle.rs`). Bundles whose directions spread go singly. Each
+//! ray answers exactly as its single-ray query.
 //!
 //! # Closest points
 //! [`Accel::closest_point`] visits children nearest first, cutting

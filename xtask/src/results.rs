@@ -133,7 +133,9 @@ fn measure_all(args: &Args) -> Result<PathBuf, String> {
     let mut page = stamp(args)?;
     let image: Vec<&str> = plan.image.to_vec();
 
-    page += "\n## Primary rays\n\nOne ray per pixel from each scene's camera, every answer \
+    page += "\n## Primary rays\n\nOne ray per pixel from a view each scene fills (`compare`'s \
+             default `--view filled`: a built-in scene's own camera where it has one, else the \
+             scene box's centre seen from 1.5 radii of its bounding sphere), every answer \
              checked (against brute force on a random subset of 20,000 rays, and against each \
              other on all of them); builds and traces on every thread. The hit share says how \
              many rays hit the mesh: a view where most rays miss times the call, not the \

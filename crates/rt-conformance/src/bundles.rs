@@ -236,47 +236,70 @@ pub fn check_coherent_bundles<A: Accel<Prim = rt_core::Triangle>>(
     any_hit_walks: bool,
 ) {
     for name in ["sphereflake", "teapot-in-stadium"] {
-        let mesh = rt_scene::scenes::builtin(name).expect("a built-in scene");
-        let tris = mesh.triangles();
-        let bounds = rt_core::valid_bounds(&tris);
-        let camera = rt_scene::Camera::framing(&bounds, 256, 192);
-        let (primary, _) = camera.tiled_rays(256, 192, (8, 8));
+        let tris = rt_scene::scenes::builtin(name)
+            .expect("a built-in scene")
+            .triangles();
         let accel = A::build(&tris, params);
-        let light = bounds.max + bounds.extent();
-        let shadow: Vec<Ray> = primary
-            .iter()
-            .filter_map(|r| {
-                let p = r.at(accel.intersect(r)?.t);
-                Some(Ray::with_interval(p, light - p, 1e-3, 1.0))
-            })
-            .collect();
-        let single: Vec<Option<Hit>> = primary.iter().map(|r| accel.intersect(r)).collect();
-        let mut hits = vec![None; primary.len()];
-        let mut c = Counters::default();
-        accel.intersect_bundle_with(&primary, &mut hits, &mut c);
-        for (i, (a, b)) in hits.iter().zip(&single).enumerate() {
-            assert!(
-                same_bits(*a, *b),
-                "{name}: primary ray {i}: bundle {a:?}, single {b:?}"
-            );
+        if let Err(e) = check_coherent_bundles_on(&accel, &tris, (256, 192), any_hit_walks) {
+            panic!("{name}: {e}");
         }
-        assert!(c.lane_slots > 0, "{name}: no bundle step at all: {c:?}");
-        assert!(
-            c.single_rays * 4 < primary.len() as u64,
-            "{name}: {} of {} primary rays finished alone",
+    }
+}
+
+/// [`check_coherent_bundles`] on one scene: `tris` built into `accel`, primary rays of a
+/// `width × height` image framing them in 8×8 tiles and their shadow rays. The first problem
+/// found is the error.
+pub fn check_coherent_bundles_on<A: Accel>(
+    accel: &A,
+    tris: &[rt_core::Triangle],
+    (width, height): (u32, u32),
+    any_hit_walks: bool,
+) -> Result<(), String> {
+    let bounds = rt_core::valid_bounds(tris);
+    let camera = rt_scene::Camera::framing(&bounds, width, height);
+    let (primary, _) = camera.tiled_rays(width, height, (8, 8));
+    let light = bounds.max + bounds.extent();
+    let shadow: Vec<Ray> = primary
+        .iter()
+        .filter_map(|r| {
+            let p = r.at(accel.intersect(r)?.t);
+            Some(Ray::with_interval(p, light - p, 1e-3, 1.0))
+        })
+        .collect();
+    let single: Vec<Option<Hit>> = primary.iter().map(|r| accel.intersect(r)).collect();
+    let mut hits = vec![None; primary.len()];
+    let mut c = Counters::default();
+    accel.intersect_bundle_with(&primary, &mut hits, &mut c);
+    if let Some(i) = (0..hits.len()).find(|&i| !same_bits(hits[i], single[i])) {
+        return Err(format!(
+            "primary ray {i}: bundle {:?}, single {:?}",
+            hits[i], single[i]
+        ));
+    }
+    if c.lane_slots == 0 {
+        return Err(format!("no bundle step at all: {c:?}"));
+    }
+    if c.single_rays * 4 >= primary.len() as u64 {
+        return Err(format!(
+            "{} of {} primary rays finished alone",
             c.single_rays,
             primary.len()
-        );
-        let blocked: Vec<bool> = shadow.iter().map(|r| accel.occluded(r)).collect();
-        let mut got = vec![false; shadow.len()];
-        let mut c = Counters::default();
-        accel.occluded_bundle_with(&shadow, &mut got, &mut c);
-        assert_eq!(got, blocked, "{name}: shadow rays");
-        assert!(
-            !any_hit_walks || c.lane_slots > 0,
-            "{name}: no shadow bundle step at all: {c:?}"
-        );
+        ));
     }
+    let blocked: Vec<bool> = shadow.iter().map(|r| accel.occluded(r)).collect();
+    let mut got = vec![false; shadow.len()];
+    let mut c = Counters::default();
+    accel.occluded_bundle_with(&shadow, &mut got, &mut c);
+    if let Some(i) = (0..got.len()).find(|&i| got[i] != blocked[i]) {
+        return Err(format!(
+            "shadow ray {i}: bundle {}, single {}",
+            got[i], blocked[i]
+        ));
+    }
+    if any_hit_walks && c.lane_slots == 0 {
+        return Err(format!("no shadow bundle step at all: {c:?}"));
+    }
+    Ok(())
 }
 
 #[cfg(test)]

@@ -48,7 +48,8 @@ mod bundles;
 mod instances;
 mod refit;
 pub use bundles::{
-    BUNDLE_SIZES, bundle_orders, check_coherent_bundles, compare_bundles, same_bits,
+    BUNDLE_SIZES, bundle_orders, check_coherent_bundles, check_coherent_bundles_on,
+    compare_bundles, same_bits,
 };
 pub use instances::{
     BottomBuilder, InstancedCase, Placement, TWO_LEVEL_SCENES, check_two_level_case,

@@ -478,3 +478,133 @@ fn a_bundle_traversal_that_drops_a_lane_fails() {
         .expect_err("the kit must run the bundle check");
     assert!(e.contains("intersect_bundle gives"), "{e}");
 }
+
+/// Brute force with a bundle walk of its own: every lane of a bundle tested against every
+/// triangle through the shared eight-lane tests, except that with `DROP` the last lane of every
+/// bundle gets no answer; with `ALONE` the bundle queries are the default loop over single rays.
+struct Walker<const DROP: bool, const ALONE: bool>(BruteForce<Triangle>, Vec<Triangle>);
+
+impl<const DROP: bool, const ALONE: bool> Walker<DROP, ALONE> {
+    fn query<S: Stats, const ANY: bool>(
+        &self,
+        rays: &[Ray],
+        slots: usize,
+        stats: &mut S,
+        answer: impl FnMut(usize, Option<Hit>),
+    ) {
+        let ids: Vec<u32> = (0..self.1.len() as u32).collect();
+        let bounds = self.0.bounds();
+        rt_core::bundle::walk_groups::<S, ANY>(
+            rays,
+            slots,
+            stats,
+            |ray, stats| {
+                let hit = self.0.intersect_with(ray, stats);
+                hit.map(|h| if ANY { Hit { t: f32::NAN, ..h } } else { h })
+            },
+            |b| b.route(&bounds, |_| true),
+            |b, lanes, stats| {
+                stats.node_visit();
+                stats.bundle_lanes(b.len() as u32, b.len() as u32);
+                let mut mailbox = rt_core::bundle::LaneMailbox::new();
+                let all = b.all_lanes();
+                let t_hi = lanes.far_end();
+                rt_core::bundle::test_primitives::<Triangle, S, ANY>(
+                    &self.1,
+                    &ids,
+                    (b, t_hi),
+                    lanes,
+                    if DROP { all >> 1 } else { all },
+                    &mut mailbox,
+                    stats,
+                );
+                0
+            },
+            answer,
+        );
+    }
+}
+
+impl<const DROP: bool, const ALONE: bool> Accel for Walker<DROP, ALONE> {
+    type Prim = Triangle;
+    type Params = ();
+    const NAME: &'static str = "walker";
+    fn presets() -> Vec<(&'static str, ())> {
+        vec![("default", ())]
+    }
+    fn build(prims: &[Triangle], _: &()) -> Self {
+        Self(BruteForce::build(prims, &()), prims.to_vec())
+    }
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        self.0.intersect_with(ray, stats)
+    }
+    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+        self.0.occluded_with(ray, stats)
+    }
+    fn intersect_bundle_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        stats: &mut S,
+    ) {
+        if ALONE {
+            rt_core::bundle::intersect_each(self, rays, out, stats);
+        } else {
+            self.query::<S, false>(rays, out.len(), stats, |slot, hit| out[slot] = hit);
+        }
+    }
+    fn occluded_bundle_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
+        if ALONE {
+            rt_core::bundle::occluded_each(self, rays, out, stats);
+        } else {
+            self.query::<S, true>(rays, out.len(), stats, |slot, hit| {
+                out[slot] = hit.is_some()
+            });
+        }
+    }
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.ball_query(query, stats);
+    }
+    fn bounds(&self) -> Aabb {
+        self.0.bounds()
+    }
+    fn memory_bytes(&self) -> usize {
+        self.0.memory_bytes()
+    }
+    fn build_stats(&self) -> BuildStats {
+        self.0.build_stats()
+    }
+}
+
+/// The coherent-bundle check passes a bundle walk that answers as its single rays, and fails
+/// one that drops a lane and one whose rays all go alone.
+#[test]
+fn the_coherent_bundle_check_fails_a_dropped_lane_and_rays_that_go_alone() {
+    let tris = rt_scene::scenes::builtin("teapot:1000")
+        .expect("a built-in scene")
+        .triangles();
+    let size = (32, 24);
+    rt_conformance::check_coherent_bundles_on(
+        &Walker::<false, false>::build(&tris, &()),
+        &tris,
+        size,
+        true,
+    )
+    .unwrap();
+    let e = rt_conformance::check_coherent_bundles_on(
+        &Walker::<true, false>::build(&tris, &()),
+        &tris,
+        size,
+        true,
+    )
+    .unwrap_err();
+    assert!(e.starts_with("primary ray "), "{e}");
+    let e = rt_conformance::check_coherent_bundles_on(
+        &Walker::<false, true>::build(&tris, &()),
+        &tris,
+        size,
+        true,
+    )
+    .unwrap_err();
+    assert!(e.starts_with("no bundle step at all"), "{e}");
+}

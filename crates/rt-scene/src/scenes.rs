@@ -152,6 +152,28 @@ pub fn camera_for(spec: &str, bounds: &Aabb, width: u32, height: u32) -> Camera 
     }
 }
 
+/// Which view of a scene a benchmark's primary rays come from.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum View {
+    /// A view the scene fills: a built-in scene's own camera where it has one (the teapot in a
+    /// stadium, seen from the stands), else [`Camera::filled`]. Most primary rays enter the
+    /// scene's box, so their speed is the speed of traversal.
+    #[default]
+    Filled,
+    /// The whole scene box in the image ([`camera_for`]): most rays of a compact mesh miss its
+    /// box and leave after one test.
+    Sparse,
+}
+
+/// The camera of `view` for the scene `spec` with box `bounds` (see [`View`]).
+pub fn camera_for_view(spec: &str, bounds: &Aabb, width: u32, height: u32, view: View) -> Camera {
+    match (view, find(spec).and_then(|s| s.camera)) {
+        (View::Sparse, _) => camera_for(spec, bounds, width, height),
+        (View::Filled, Some(own)) => own,
+        (View::Filled, None) => Camera::filled(bounds),
+    }
+}
+
 /// The built-in scene `spec` asks for (`name` or `name:size`, see [`resolve`]), if it names one
 /// with a valid size.
 pub fn builtin(spec: &str) -> Option<Mesh> {

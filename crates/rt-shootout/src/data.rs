@@ -94,6 +94,8 @@ pub struct Report {
     pub triangles: usize,
     pub valid_triangles: usize,
     pub ray_kind: &'static str,
+    /// The view primary and shadow rays come from (`filled` or `sparse`); empty for other rays.
+    pub view: &'static str,
     pub rays: usize,
     pub threads: usize,
     pub checked_rays: usize,

@@ -18,12 +18,33 @@ pub enum QueryKind {
 /// Which rays to trace.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum RayKind {
-    /// One ray per pixel from a pinhole camera framing the scene.
+    /// One ray per pixel from a pinhole camera (`--view` says which).
     Primary,
     /// Random origins inside the scene box, random directions.
     Incoherent,
     /// Occlusion rays from the primary hits to a point light (any-hit queries).
     Shadow,
+}
+
+/// Which view primary rays (and the shadow rays from their hits) come from.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum ViewKind {
+    /// A view the scene fills: a built-in scene's own camera where it has one, else the scene
+    /// box's centre seen from 1.5 radii of its bounding sphere. Most rays enter the box.
+    #[default]
+    Filled,
+    /// The whole scene box in the image: most rays of a compact mesh miss its box and leave
+    /// after one test, which measures a call's cost more than traversal.
+    Sparse,
+}
+
+impl From<ViewKind> for rt_scene::scenes::View {
+    fn from(v: ViewKind) -> Self {
+        match v {
+            ViewKind::Filled => Self::Filled,
+            ViewKind::Sparse => Self::Sparse,
+        }
+    }
 }
 
 #[derive(clap::Args, Debug, Clone)]
@@ -63,6 +84,9 @@ pub struct Args {
     /// Which rays to trace [default: primary].
     #[arg(long, value_enum)]
     pub rays: Option<RayKind>,
+    /// The view of primary and shadow rays.
+    #[arg(long, value_enum, default_value_t = ViewKind::Filled)]
+    pub view: ViewKind,
     /// Image width for primary and shadow rays (incoherent: width × height rays).
     #[arg(long, default_value_t = 1024)]
     pub width: u32,

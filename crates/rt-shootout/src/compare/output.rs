@@ -23,9 +23,14 @@ pub(super) fn to_table(r: &Report) -> String {
         let hits = r
             .hit_share()
             .map_or(String::new(), |h| format!(" ({:.1}% hit)", 100.0 * h));
+        let view = if r.view.is_empty() {
+            String::new()
+        } else {
+            format!(" from the {} view", r.view)
+        };
         let _ = writeln!(
             s,
-            "scene {} ({} triangles, {} valid), {} {} rays{hits}, {} threads; {} rays checked against brute force",
+            "scene {} ({} triangles, {} valid), {} {} rays{view}{hits}, {} threads; {} rays checked against brute force",
             r.scene, r.triangles, r.valid_triangles, r.rays, r.ray_kind, r.threads, r.checked_rays
         );
     }
@@ -266,6 +271,7 @@ pub(super) fn to_json(r: &Report) -> String {
         "valid_triangles": r.valid_triangles,
         "query": if r.ray_kind == points::KIND { "closest-point" } else { "rays" },
         "ray_kind": r.ray_kind,
+        "view": r.view,
         "rays": r.rays,
         "hit_share": r.hit_share(),
         "threads": r.threads,

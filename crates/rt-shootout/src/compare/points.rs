@@ -123,6 +123,7 @@ pub(super) fn measure(
         triangles: tris.len(),
         valid_triangles: valid,
         ray_kind: KIND,
+        view: "",
         rays: queries.len(),
         threads,
         checked_rays: subset.len() + settled,

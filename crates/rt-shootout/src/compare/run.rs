@@ -2,7 +2,7 @@
 //! and every answer cross-checked.
 
 use super::output::{describe_disagreements, to_json, to_table};
-use super::{Args, QueryKind, RayKind, points};
+use super::{Args, QueryKind, RayKind, ViewKind, points};
 use crate::data::{BundleRow, Disagreement, Report, Row, predicted_per_ray};
 use crate::scene::load_scene;
 use crate::structures::{self, Pass, Query};
@@ -262,6 +262,11 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
         triangles: source.triangles,
         valid_triangles: source.valid,
         ray_kind,
+        view: match (ray_kind, args.view) {
+            ("primary" | "shadow", ViewKind::Filled) => "filled",
+            ("primary" | "shadow", ViewKind::Sparse) => "sparse",
+            _ => "",
+        },
         rays: rays.len(),
         threads,
         checked_rays: subset.len() + settled,
@@ -427,7 +432,13 @@ fn make_rays(args: &Args, source: &Source) -> Result<(Vec<Ray>, &'static str, Qu
             args.height,
         )
     } else {
-        scenes::camera_for(&args.scene, bounds, args.width, args.height)
+        scenes::camera_for_view(
+            &args.scene,
+            bounds,
+            args.width,
+            args.height,
+            args.view.into(),
+        )
     };
     let shared_kind = match kind {
         RayKind::Primary => raygen::RayKind::Primary,
@@ -815,6 +826,40 @@ mod tests {
         fn build_stats(&self) -> BuildStats {
             self.0.build_stats()
         }
+    }
+
+    /// The filled view (the default) sees the mesh large: more of its rays hit than the
+    /// sparse view's, and the header names the view.
+    #[test]
+    fn the_filled_view_hits_more_than_the_sparse_one_and_is_named() {
+        let run = |view: &str| {
+            let a = args(&[
+                "--scene",
+                "teapot:1000",
+                "--width",
+                "64",
+                "--height",
+                "48",
+                "--repeats",
+                "0",
+                "--view",
+                view,
+            ]);
+            let entries = structures::all()
+                .into_iter()
+                .filter(|e| e.name == "bvh")
+                .collect();
+            measure(&a, 1, entries).unwrap()
+        };
+        let (filled, sparse) = (run("filled"), run("sparse"));
+        let (f, s) = (filled.hit_share().unwrap(), sparse.hit_share().unwrap());
+        assert!(f > 0.4 && f > 1.5 * s, "filled {f}, sparse {s}");
+        assert!(
+            to_table(&filled).contains("primary rays from the filled view ("),
+            "{}",
+            to_table(&filled)
+        );
+        assert!(to_table(&sparse).contains("primary rays from the sparse view ("));
     }
 
     #[test]

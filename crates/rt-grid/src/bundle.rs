@@ -32,7 +32,7 @@
 
 use crate::Grid;
 use crate::cell::GridShape;
-use crate::dda::{Dda, RayAxes};
+use crate::dda::{RayAxes, first_cell};
 use rt_core::bundle::{BUNDLE_LANES, Bundle, LaneMailbox, Lanes, test_primitives};
 use rt_core::{Hit, Primitive, Ray, SLAB_FAR_SCALE, Stats};
 
@@ -243,8 +243,9 @@ pub fn walk_slices(
 }
 
 /// The slice where each live lane starts, and the first of them in the direction of travel:
-/// the slice of the first cell of the lane's single walk ([`Dda::start`], which finds it by
-/// comparing the planes' parameters with the lane's entry), stepped one back, since a lane's
+/// the slice of the first cell of the lane's single walk ([`first_cell`], as `Dda::start`
+/// finds it, by comparing the planes' parameters with the lane's entry), stepped one back,
+/// since a lane's
 /// closest hit may lie just before its entry by rounding (a ray that grazes the box's corner).
 fn start_slices(
     shape: &GridShape,
@@ -261,7 +262,7 @@ fn start_slices(
     while m != 0 {
         let i = m.trailing_zeros() as usize;
         m &= m - 1;
-        let k = Dda::start(shape, &RayAxes::new(&lanes.rays[i]), t0[i]).cell[major];
+        let k = first_cell(shape, &RayAxes::new(&lanes.rays[i]), major, t0[i]);
         start[i] = if forward {
             k.saturating_sub(1)
         } else {
@@ -396,37 +397,40 @@ impl Frame {
         let mut lo = [[f32::INFINITY; W]; 2];
         let mut hi = [[f32::NEG_INFINITY; W]; 2];
         let (mut crossing, mut done) = (0u64, 0u64);
+        let (om, inv) = (&b.origin[m], &b.inv_dir[m]);
+        let (ou, ov) = (&b.origin[u], &b.origin[v]);
+        // PERF: written without branches and with `<`/`>` selects instead of `f32::min`/`max`
+        // (whose NaN rules keep the compiler from vector instructions), so that each step of
+        // eight lanes compiles to vector code: the hierarchical grid's bundles went from 5.23
+        // to 5.73 Mrays/s on the teapot in a stadium and from 3.91 to 4.26 on the sphereflake
+        // (`compare --bundle 8x8 -j 1`, primary rays of the filled views).
+        // No coordinate is NaN: a bundle's lanes have finite origins and finite, non-zero
+        // direction components, so the slopes and distances are finite (at worst a product
+        // overflows to an infinity, which `span` widens to the whole axis).
         for step in 0..BUNDLE_LANES / W {
-            if (live >> (step * W)) as u8 == 0 {
+            let lanes8 = (live >> (step * W)) as u8;
+            if lanes8 == 0 {
                 continue;
             }
             let mut cross = [false; W];
             let mut gone = [false; W];
             for j in 0..W {
                 let i = step * W + j;
-                let (dn, df) = (near - b.origin[m][i], far - b.origin[m][i]);
-                let tn = dn * b.inv_dir[m][i];
-                gone[j] = tn > best[i] * SLAB_FAR_SCALE || tn > t1[i] * SLAB_FAR_SCALE;
+                let (dn, df) = (near - om[i], far - om[i]);
+                let tn = dn * inv[i];
+                gone[j] = (tn > best[i] * SLAB_FAR_SCALE) | (tn > t1[i] * SLAB_FAR_SCALE);
                 let started = if self.forward {
                     s >= start[i]
                 } else {
                     s <= start[i]
                 };
                 cross[j] = started;
-                for (k, axis) in [u, v].into_iter().enumerate() {
-                    let o = b.origin[axis][i];
+                let keep = started & (lanes8 >> j & 1 != 0);
+                for (k, o) in [ou[i], ov[i]].into_iter().enumerate() {
                     let (a, z) = (o + self.slope[k][i] * dn, o + self.slope[k][i] * df);
-                    let keep = cross[j] && (live >> i & 1 != 0);
-                    lo[k][j] = if keep {
-                        lo[k][j].min(a.min(z))
-                    } else {
-                        lo[k][j]
-                    };
-                    hi[k][j] = if keep {
-                        hi[k][j].max(a.max(z))
-                    } else {
-                        hi[k][j]
-                    };
+                    let (mn, mx) = if a < z { (a, z) } else { (z, a) };
+                    lo[k][j] = if keep & (mn < lo[k][j]) { mn } else { lo[k][j] };
+                    hi[k][j] = if keep & (mx > hi[k][j]) { mx } else { hi[k][j] };
                 }
             }
             for j in 0..W {

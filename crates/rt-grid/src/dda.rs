@@ -135,9 +135,10 @@ impl Dda {
     }
 }
 
-/// The cell on `axis` where the ray is at parameter `t0` (see [`Dda::start`]).
+/// The cell on `axis` where the ray is at parameter `t0`: the coordinate `axis` of
+/// [`Dda::start`]'s first cell, without the other two.
 #[inline(always)]
-fn first_cell(shape: &GridShape, r: &RayAxes, axis: usize, t0: f32) -> u32 {
+pub fn first_cell(shape: &GridShape, r: &RayAxes, axis: usize, t0: f32) -> u32 {
     let n = shape.resolution_per_axis()[axis];
     let mut k = shape.cell_of(axis, r.o[axis] + r.d[axis] * t0);
     let t = |k| r.t_at(shape, axis, k);

@@ -4,8 +4,8 @@ use crate::RenderScene;
 use crate::whitted::Context;
 use rayon::prelude::*;
 use rt_core::DynAccel;
-use rt_core::Shape;
 use rt_core::glam::Vec3;
+use rt_core::{Ray, Shape};
 use std::fmt;
 use std::path::{Path, PathBuf};
 use std::sync::atomic::{AtomicUsize, Ordering};
@@ -167,9 +167,31 @@ pub fn render(
         max_depth: options.depth.max(1),
     };
     let raster = scene.camera.raster(options.width, options.height);
-    let pixels = per_pixel(options.width, options.height, progress, |x, y| {
-        let ray = raster.ray(x as f32 + 0.5, y as f32 + 0.5);
-        encode(ctx.radiance(&ray, 0))
+    let pixels = per_tile(options.width, options.height, progress, |x0, y0, w, h| {
+        let mut out = vec![[0u8; 3]; (w * h) as usize];
+        // The tile's pixels in blocks of 8x8, each block row by row: a block's primary rays
+        // make one coherent bundle.
+        let mut at = Vec::with_capacity(out.len());
+        for by in (0..h).step_by(BLOCK as usize) {
+            for bx in (0..w).step_by(BLOCK as usize) {
+                for y in by..(by + BLOCK).min(h) {
+                    for x in bx..(bx + BLOCK).min(w) {
+                        at.push((y * w + x) as usize);
+                    }
+                }
+            }
+        }
+        let rays: Vec<Ray> = at
+            .iter()
+            .map(|&i| {
+                let (x, y) = (x0 + i as u32 % w, y0 + i as u32 / w);
+                raster.ray(x as f32 + 0.5, y as f32 + 0.5)
+            })
+            .collect();
+        for (&i, color) in at.iter().zip(ctx.radiance_bundle(&rays)) {
+            out[i] = encode(color);
+        }
+        out
     })?;
     Ok(Image {
         width: options.width,
@@ -178,12 +200,35 @@ pub fn render(
     })
 }
 
+/// Side of the square blocks of pixels whose primary rays [`render`] traces as one bundle
+/// (64 rays, a full bundle of [`rt_core::BUNDLE_LANES`]).
+const BLOCK: u32 = 8;
+
 /// Fills a `width × height` image by calling `pixel(x, y)` for every pixel, tiles in parallel.
 pub(crate) fn per_pixel<T: Copy + Default + Send>(
     width: u32,
     height: u32,
     progress: &(dyn Fn(usize, usize) + Sync),
     pixel: impl Fn(u32, u32) -> T + Sync,
+) -> Result<Vec<T>, ImageError> {
+    per_tile(width, height, progress, |x0, y0, w, h| {
+        let mut out = Vec::with_capacity((w * h) as usize);
+        for y in y0..y0 + h {
+            for x in x0..x0 + w {
+                out.push(pixel(x, y));
+            }
+        }
+        out
+    })
+}
+
+/// Fills a `width × height` image tile by tile in parallel: `tile(x0, y0, w, h)` returns the
+/// `w × h` pixels of the tile at `(x0, y0)`, row by row.
+fn per_tile<T: Copy + Default + Send>(
+    width: u32,
+    height: u32,
+    progress: &(dyn Fn(usize, usize) + Sync),
+    tile: impl Fn(u32, u32, u32, u32) -> Vec<T> + Sync,
 ) -> Result<Vec<T>, ImageError> {
     Image::new(width, height)?;
     let (tiles_x, tiles_y) = (width.div_ceil(TILE), height.div_ceil(TILE));
@@ -193,12 +238,8 @@ pub(crate) fn per_pixel<T: Copy + Default + Send>(
         .into_par_iter()
         .map(|k| {
             let (x0, y0) = ((k % tiles_x) * TILE, (k / tiles_x) * TILE);
-            let mut out = Vec::with_capacity((TILE * TILE) as usize);
-            for y in y0..(y0 + TILE).min(height) {
-                for x in x0..(x0 + TILE).min(width) {
-                    out.push(pixel(x, y));
-                }
-            }
+            let (w, h) = (TILE.min(width - x0), TILE.min(height - y0));
+            let out = tile(x0, y0, w, h);
             progress(done.fetch_add(1, Ordering::Relaxed) + 1, total);
             (x0, y0, out)
         })
@@ -225,4 +266,50 @@ pub fn encode(linear: Vec3) -> [u8; 3] {
         };
         (s * 255.0 + 0.5) as u8
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rt_core::Accel;
+
+    /// The picture [`render`] makes by tracing bundles, against one made pixel by pixel with
+    /// single rays ([`Context::radiance`]): the same bytes, through structures whose bundle
+    /// traversals are their own (a wrong pairing of rays and answers, or a lane answered
+    /// differently, changes pixels).
+    #[test]
+    fn bundles_render_the_single_rays_bytes() {
+        let scene = RenderScene::whitted();
+        let shapes = scene.shapes();
+        let options = RenderOptions {
+            width: 90,
+            height: 60,
+            depth: 3,
+        };
+        let grid = rt_grid::Grid::build(&shapes, &Default::default());
+        let octree = rt_octree::Octree::build(&shapes, &Default::default());
+        let bvh = rt_bvh::Bvh::build(&shapes, &Default::default());
+        let tracers: [(&str, &dyn DynAccel<Shape>); 3] =
+            [("grid", &grid), ("octree", &octree), ("bvh", &bvh)];
+        for (name, tracer) in tracers {
+            let bundled = render(&scene, &shapes, tracer, &options, &|_, _| {}).unwrap();
+            let ctx = Context {
+                scene: &scene,
+                shapes: &shapes,
+                tracer,
+                max_depth: options.depth,
+            };
+            let raster = scene.camera.raster(options.width, options.height);
+            let single = per_pixel(options.width, options.height, &|_, _| {}, |x, y| {
+                encode(ctx.radiance(&raster.ray(x as f32 + 0.5, y as f32 + 0.5), 0))
+            })
+            .unwrap();
+            let differ = single
+                .iter()
+                .zip(&bundled.pixels)
+                .filter(|(a, b)| a != b)
+                .count();
+            assert_eq!(differ, 0, "{name}: {differ} pixels differ from single rays");
+        }
+    }
 }

@@ -8,14 +8,19 @@
 //!   scenes and OBJ files.
 //! - [`render`]: primary rays through every pixel, shadow rays to each light through the
 //!   any-hit query, mirror and refracted rays to a fixed depth (see `whitted.rs`), tiles in
-//!   parallel on rayon's pool. Secondary rays start at the hit moved off its surface by an
-//!   error bound ([`rt_core::SurfacePoint::spawn_ray`]), never by a per-scene epsilon.
+//!   parallel on rayon's pool. Each tile's primary rays are traced as bundles of 8×8 pixels,
+//!   and their shadow rays as one batch per light ([`rt_core::Accel::intersect_bundle`],
+//!   [`rt_core::Accel::occluded_bundle`]); the answers are the single rays' to the bit, so the
+//!   picture is the same bytes either way. Secondary rays start at the hit moved off its
+//!   surface by an error bound ([`rt_core::SurfacePoint::spawn_ray`]), never by a per-scene
+//!   epsilon.
 //! - [`cost_map`] and [`heatmap_strip`]: the primary rays' node visits or primitive tests per
 //!   pixel, several structures side by side on one colour scale with a legend.
 //! - [`slice_svg`]: a drawing of a structure's nodes or cells ([`rt_core::Accel::regions`])
 //!   where they meet an axis-aligned plane, with the mesh's cross-section, as SVG.
 //! - Any structure over [`Shape`](rt_core::Shape)s renders, seen through rt-core's object-safe
-//!   [`DynAccel`](rt_core::DynAccel): one call per ray crosses the trait object.
+//!   [`DynAccel`](rt_core::DynAccel): one call per ray, or per batch of rays, crosses the
+//!   trait object.
 //!
 //! Every correct structure renders the same bytes: the renderer re-derives each hit from the
 //! primitive the structure names, and the tie rule makes that primitive unique.

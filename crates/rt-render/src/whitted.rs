@@ -3,7 +3,7 @@
 //! shadow ray sees, then a mirror ray and a refracted ray (Snell's law, Schlick's Fresnel
 //! weights, total internal reflection) where the material asks, to a fixed depth.
 
-use crate::RenderScene;
+use crate::{PointLight, RenderScene};
 use rt_core::DynAccel;
 use rt_core::{Hit, Primitive, Ray, Shape, SurfacePoint, glam::Vec3};
 
@@ -13,6 +13,22 @@ pub(crate) struct Context<'a> {
     pub shapes: &'a [Shape],
     pub tracer: &'a dyn DynAccel<Shape>,
     pub max_depth: u32,
+}
+
+/// A hit ready to shade: the surface, its normals turned towards the viewer, and the viewing
+/// direction.
+#[derive(Clone, Copy, Debug)]
+pub(crate) struct Lit {
+    prim: usize,
+    at: SurfacePoint,
+    /// Unit shading normal, facing the viewer.
+    normal: Vec3,
+    /// Geometric normal, facing the viewer.
+    geometric: Vec3,
+    /// The ray's unit direction.
+    d: Vec3,
+    /// Whether the ray arrives at the front of the surface.
+    entering: bool,
 }
 
 /// What the renderer knows of a hit after re-deriving it from the primitive itself.
@@ -30,6 +46,49 @@ impl Context<'_> {
             Some(hit) => self.shade(ray, hit, depth),
             None => self.sky(ray.dir()),
         }
+    }
+
+    /// The colours seen along `rays`, the primary rays and the first shadow rays traced as
+    /// bundles ([`DynAccel::intersect_bundle_dyn`], [`DynAccel::occluded_bundle_dyn`]): the
+    /// shadow rays towards each light, in the order of their pixels, make one batch. Deeper
+    /// rays go one by one. Each answer is the single ray's, so the colours are
+    /// [`Context::radiance`]'s to the bit.
+    pub fn radiance_bundle(&self, rays: &[Ray]) -> Vec<Vec3> {
+        let mut hits = vec![None; rays.len()];
+        self.tracer.intersect_bundle_dyn(rays, &mut hits, None);
+        let lits: Vec<Option<Lit>> = rays
+            .iter()
+            .zip(&hits)
+            .map(|(ray, hit)| hit.map(|hit| self.lit(ray, hit)))
+            .collect();
+        // Each pixel's shadow ray towards each light, if any: its index in `shadow`.
+        let lights = &self.scene.lights;
+        let mut slot = vec![u32::MAX; rays.len() * lights.len()];
+        let mut shadow = Vec::new();
+        for (k, light) in lights.iter().enumerate() {
+            for (i, lit) in lits.iter().enumerate() {
+                if let Some((ray, ..)) = lit.as_ref().and_then(|l| self.shadow_ray(l, light)) {
+                    slot[i * lights.len() + k] = shadow.len() as u32;
+                    shadow.push(ray);
+                }
+            }
+        }
+        let mut blocked = vec![false; shadow.len()];
+        self.tracer.occluded_bundle_dyn(&shadow, &mut blocked, None);
+        rays.iter()
+            .zip(&lits)
+            .enumerate()
+            .map(|(i, (ray, lit))| match lit {
+                Some(lit) => self.shade_lit(lit, 0, |k, ray| {
+                    match blocked.get(slot[i * lights.len() + k] as usize) {
+                        Some(&b) => b,
+                        // Not planned above (it always is): trace it now.
+                        None => self.tracer.occluded_dyn(ray, None),
+                    }
+                }),
+                None => self.sky(ray.dir()),
+            })
+            .collect()
     }
 
     fn sky(&self, dir: Vec3) -> Vec3 {
@@ -68,7 +127,14 @@ impl Context<'_> {
     }
 
     fn shade(&self, ray: &Ray, hit: Hit, depth: u32) -> Vec3 {
-        let material = self.scene.material(hit.prim as usize);
+        let lit = self.lit(ray, hit);
+        self.shade_lit(&lit, depth, |_, shadow| {
+            self.tracer.occluded_dyn(shadow, None)
+        })
+    }
+
+    /// The surface at `hit` seen along `ray`, its normals turned to face the viewer.
+    pub fn lit(&self, ray: &Ray, hit: Hit) -> Lit {
         let Surface { at, mut normal } = self.surface(ray, hit);
         let d = ray.dir().normalize();
         // Face the viewer: flip both normals when the ray arrives from the back (or from inside
@@ -83,7 +149,46 @@ impl Context<'_> {
         if normal.dot(d) >= 0.0 {
             normal = geometric;
         }
+        Lit {
+            prim: hit.prim as usize,
+            at,
+            normal,
+            geometric,
+            d,
+            entering,
+        }
+    }
 
+    /// The shadow ray from `lit` to `light`, and the cosine at the surface, if the light is in
+    /// front of it (lights behind the surface, as the geometry faces, cannot reach it).
+    pub fn shadow_ray(&self, lit: &Lit, light: &PointLight) -> Option<(Ray, f32, Vec3)> {
+        let to_light = light.position - lit.at.point;
+        let l = to_light.normalize_or_zero();
+        let lambert = lit.normal.dot(l);
+        if lambert <= 0.0 || lit.geometric.dot(l) <= 0.0 {
+            return None;
+        }
+        Some((lit.at.spawn_ray_to(light.position), lambert, l))
+    }
+
+    /// The colour of `lit`, which has `depth` bounces behind it; `occluded(k, shadow)` answers
+    /// whether the shadow ray towards light `k` is blocked (a renderer tracing bundles has
+    /// traced it already).
+    pub fn shade_lit(
+        &self,
+        lit: &Lit,
+        depth: u32,
+        mut occluded: impl FnMut(usize, &Ray) -> bool,
+    ) -> Vec3 {
+        let material = self.scene.material(lit.prim);
+        let &Lit {
+            at,
+            normal,
+            geometric,
+            d,
+            entering,
+            ..
+        } = lit;
         let albedo = match material.checker {
             Some(other) => {
                 let s = material.checker_size;
@@ -101,18 +206,11 @@ impl Context<'_> {
         };
         let opaque = 1.0 - material.transmission;
         let mut color = self.scene.ambient * albedo * material.diffuse * opaque;
-        for light in &self.scene.lights {
-            let to_light = light.position - at.point;
-            let l = to_light.normalize_or_zero();
-            let lambert = normal.dot(l);
-            // Lights behind the surface (as the geometry faces) cannot reach it.
-            if lambert <= 0.0 || geometric.dot(l) <= 0.0 {
+        for (k, light) in self.scene.lights.iter().enumerate() {
+            let Some((shadow, lambert, l)) = self.shadow_ray(lit, light) else {
                 continue;
-            }
-            if self
-                .tracer
-                .occluded_dyn(&at.spawn_ray_to(light.position), None)
-            {
+            };
+            if occluded(k, &shadow) {
                 continue;
             }
             let diffuse = albedo * (material.diffuse * opaque * lambert);

@@ -20,11 +20,25 @@
 //! the single ray's, bit for bit.
 
 use crate::kernels::{BoxRay, RayData, Simd};
-use crate::node::{ChildRef, WIDTH, WideNode};
+use crate::node::{ChildRef, Node, WIDTH, WideNode};
 use crate::simd::Stack;
 use crate::traverse::{Leaves, WIDE_STACK};
-use rt_core::bundle::Bundle;
-use rt_core::{BUNDLE_LANES, Hit, SLAB_FAR_SCALE, Shear, Stats};
+use crate::{Items, MAX_DEPTH};
+use rt_core::bundle::{Bundle, Lanes, narrow};
+use rt_core::{BUNDLE_LANES, Hit, Primitive, SLAB_FAR_SCALE, Shear, Stats};
+
+/// The most the lanes' directions may spread ([`Bundle::direction_spread`], about radians) for
+/// the bundle to walk together; wider bundles go singly.
+// PERF: without a bound (and without `walk_groups`' test of a run's first rays), incoherent
+// rays walked as bundles of a sixth of their lanes at 0.49-0.64x the speed of single rays
+// (`compare --rays incoherent --bundle 8x8 -j 1`: teapot in a stadium, sphereflake, bunny).
+// PERF: shadow rays of the sphereflake's filled view in 8x8 tiles, bundles ÷ single rays
+// (`compare --scene sphereflake --rays shadow --bundle 8x8 -j 1`): at 0.08, a quarter of the
+// rays went singly and the bundles ran at 1.44x (wide BVH), 1.60x (binary BVH), 1.29x
+// (kd-tree), 1.87x (octree); at 1.0, 1.77x, 2.11x, 1.44x, 2.51x; at 2.0 or without a bound, no
+// better. Rays in random directions rarely reach this test (`walk_groups` sends runs whose
+// first rays point apart singly), and were 0.98-1.00x at every bound tried.
+pub(crate) const MAX_SPREAD: f32 = 1.0;
 
 /// Vectors of eight lanes in a bundle of [`BUNDLE_LANES`].
 const GROUPS: usize = BUNDLE_LANES / 8;
@@ -35,6 +49,16 @@ pub(crate) struct Answers {
     pub t: [f32; BUNDLE_LANES],
     /// Lanes still tracing: an any-hit lane leaves at its first hit.
     pub alive: u64,
+}
+
+impl rt_core::bundle::LaneAnswers for Answers {
+    /// The lane's best hit; for an any-hit query, `Some` when it left blocked (a lane of an
+    /// any-hit query records no hit while it traces).
+    #[inline(always)]
+    fn answer(&self, i: usize) -> Option<Hit> {
+        let best = self.best[i];
+        (self.alive >> i & 1 == 0 || best.prim != u32::MAX).then_some(best)
+    }
 }
 
 impl Answers {
@@ -246,5 +270,72 @@ pub(crate) fn wide_bundle<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
                 break;
             }
         }
+    }
+}
+
+/// The binary tree's bundle walk: the packet traversal of Wald, Boulos & Shirley (2007) with a
+/// lane mask per stack entry, as rt-kdtree's over its cells. At each node
+/// [`narrow`](rt_core::bundle::narrow) keeps the lanes that may enter its box: all of them when
+/// the first active lane's own slab test enters it, none when the bundle's interval bound
+/// rules it out, else each lane's own test. Children go nearest first along their split axis
+/// in the bundle's octant. At a leaf each primitive is tested against the lanes that reached
+/// it, eight lanes per step ([`Lanes`]).
+///
+/// Exact, as the wide tree's walk: a lane's closest hit lies in every box on the path to its
+/// leaf, and the lane's own slab test, with a best `t` no nearer than that hit, enters each of
+/// them (within [`SLAB_FAR_SCALE`], as the single walk allows), so the lane tests the
+/// primitive; every hit it records is a true hit of its own test, so the closest by the tie
+/// rule is its single ray's answer.
+pub(crate) fn binary_bundle<P: Primitive, S: Stats, const ANY: bool>(
+    nodes: &[Node],
+    items: &Items<P>,
+    b: &Bundle,
+    lanes: &mut Lanes,
+    stats: &mut S,
+) {
+    // One far child waits per level at most, and the builder bounds the depth.
+    let mut stack = [(0u32, 0u64); MAX_DEPTH + 1];
+    stack[0] = (0, b.all_lanes());
+    let mut sp = 1;
+    let mut live = b.all_lanes();
+    let mut t_hi = lanes.far_end();
+    while sp > 0 {
+        sp -= 1;
+        let (index, entered) = stack[sp];
+        let node = &nodes[index as usize];
+        let active = narrow(b, lanes, &node.bounds, entered & live, t_hi, false);
+        if active == 0 {
+            continue;
+        }
+        stats.node_visit();
+        stats.bundle_lanes(b.len() as u32, active.count_ones());
+        if node.is_leaf() {
+            let range = node.prim_range();
+            for (prim, &id) in items.prims[range.clone()].iter().zip(&items.ids[range]) {
+                if ANY {
+                    live &= !lanes.occluded(prim, id, active & live, stats);
+                    if active & live == 0 {
+                        break;
+                    }
+                } else {
+                    lanes.intersect(prim, id, active, stats);
+                }
+            }
+            if live == 0 {
+                return;
+            }
+            t_hi = lanes.far_end();
+            continue;
+        }
+        // Pushed far first, so the child the lanes reach first comes off next.
+        let (first, second) = (index + 1, node.index);
+        let (near, far) = if b.octant() >> node.axis & 1 == 0 {
+            (first, second)
+        } else {
+            (second, first)
+        };
+        stack[sp] = (far, active);
+        stack[sp + 1] = (near, active);
+        sp += 2;
     }
 }

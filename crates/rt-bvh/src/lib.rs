@@ -85,8 +85,11 @@
 //! by lane with each lane's own slab arithmetic, eight lanes per vector; leaves run the single
 //! ray's triangle test for each lane that reached them (`bundle.rs`). Every lane answers exactly
 //! as its single ray does, bit for bit (the conformance kit checks it in every order and bundle
-//! size). A bundle of one ray, a ray with a zero direction component, and every ray of the
-//! binary tree take the single-ray path.
+//! size). A bundle of one ray, a ray with a zero direction component, and a bundle whose
+//! directions spread wider than a camera tile's (rays in random directions, which would share
+//! few nodes) take the single-ray path. The binary tree walks bundles with a lane mask per
+//! stack entry and the first-active-lane rule at each box, and tests each primitive of a leaf
+//! against eight lanes per step (`bundle.rs`).
 //!
 //! # Tuning knobs ([`BvhParams`])
 //! - `layout`: [`Layout::Wide`] (default) or [`Layout::Binary`].
@@ -196,7 +199,7 @@ pub use node::{ChildRef, Node, PACK, TriPack, WIDTH, WideNode};
 pub use rt_core::ValidationError;
 
 use bundle::Answers;
-use rt_core::bundle::{Bundle, Group};
+use rt_core::bundle::Bundle;
 use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, Stats, TriangleTest};
 use simd::Isa;
 use traverse::{Packs, Prims, ScalarPacks};
@@ -539,8 +542,11 @@ impl<P: Primitive> Bvh<P> {
 impl<P: Primitive> Bvh<P> {
     /// The bundle queries' core: each of the first `slots` rays answered through `answer(slot,
     /// answer)`, where an any-hit answer is `Some` when occluded. The wide tree traces coherent
-    /// rays as bundles (`bundle.rs`); a bundle of one ray, a ray that cannot travel in one, and
-    /// every ray of a binary tree take the single-ray path.
+    /// rays as bundles (`bundle.rs`) through rt-core's frame for bundle queries
+    /// ([`walk_groups_with`](rt_core::bundle::walk_groups_with)): a bundle that misses the
+    /// root's box is answered at once; one whose directions spread more than
+    /// [`bundle::MAX_SPREAD`], a bundle of one ray and a ray that cannot travel in one take the
+    /// single-ray path. The binary tree walks its own way ([`bundle::binary_bundle`]).
     fn bundle_query<S: Stats, const ANY: bool>(
         &self,
         rays: &[Ray],
@@ -549,6 +555,7 @@ impl<P: Primitive> Bvh<P> {
         mut answer: impl FnMut(usize, Option<Hit>),
     ) {
         let rays = &rays[..rays.len().min(slots)];
+        let coherent = |b: &Bundle| b.direction_spread() <= bundle::MAX_SPREAD;
         let wide = match &self.tree {
             // PERF: a call with one ray goes straight to the single-ray path, without sorting
             // it into a bundle first.
@@ -556,6 +563,22 @@ impl<P: Primitive> Bvh<P> {
                 if rays.len() > 1 && !w.nodes.is_empty() && (!ANY || w.ablation.any_hit_path) =>
             {
                 w
+            }
+            Tree::Binary { nodes, items } if rays.len() > 1 && !items.ids.is_empty() => {
+                let bounds = self.root_bounds();
+                rt_core::bundle::walk_groups::<S, ANY>(
+                    rays,
+                    slots,
+                    stats,
+                    |ray, stats| self.query::<S, ANY>(ray, stats),
+                    |b| b.route(&bounds, coherent),
+                    |b, lanes, stats| {
+                        bundle::binary_bundle::<P, S, ANY>(nodes, items, b, lanes, stats);
+                        0
+                    },
+                    answer,
+                );
+                return;
             }
             _ => {
                 for (slot, ray) in rays.iter().enumerate() {
@@ -565,30 +588,20 @@ impl<P: Primitive> Bvh<P> {
                 return;
             }
         };
-        rt_core::bundle::for_each_bundle(rays, |group| match group {
-            Group::Bundle(b) if b.len() > 1 => {
+        let bounds = self.root_bounds();
+        rt_core::bundle::walk_groups_with::<S, Answers, ANY>(
+            rays,
+            slots,
+            stats,
+            |ray, stats| self.query::<S, ANY>(ray, stats),
+            |b| b.route(&bounds, coherent),
+            |b, stats| {
                 let mut answers = Answers::new(b);
                 wide.bundle::<S, ANY>(b, &mut answers, stats);
-                for i in 0..b.len() {
-                    let done = answers.alive & 1 << i == 0;
-                    let best = answers.best[i];
-                    let hit = if ANY {
-                        done.then_some(best)
-                    } else {
-                        (best.prim != u32::MAX).then_some(best)
-                    };
-                    answer(b.slot[i] as usize, hit);
-                }
-            }
-            Group::Bundle(b) => {
-                stats.single_ray();
-                answer(b.slot[0] as usize, self.query::<S, ANY>(&b.ray(0), stats));
-            }
-            Group::Single(slot, ray) => {
-                stats.single_ray();
-                answer(slot, self.query::<S, ANY>(ray, stats));
-            }
-        });
+                (answers, 0)
+            },
+            answer,
+        );
     }
 }
 

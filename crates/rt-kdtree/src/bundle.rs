@@ -37,7 +37,13 @@ use rt_core::{Aabb, Hit, Primitive, Ray, Stats};
 
 /// The most the lanes' directions may spread ([`Bundle::direction_spread`], about radians) for
 /// the bundle to walk together.
-pub const MAX_SPREAD: f32 = 0.08;
+// PERF: shadow rays of the sphereflake's filled view in 8x8 tiles, bundles ÷ single rays
+// (`compare --scene sphereflake --rays shadow --bundle 8x8 -j 1`): at 0.08, a quarter of the
+// rays went singly and the bundles ran at 1.44x (wide BVH), 1.60x (binary BVH), 1.29x
+// (kd-tree), 1.87x (octree); at 1.0, 1.77x, 2.11x, 1.44x, 2.51x; at 2.0 or without a bound, no
+// better. Rays in random directions rarely reach this test (`walk_groups` sends runs whose
+// first rays point apart singly), and were 0.98-1.00x at every bound tried.
+pub const MAX_SPREAD: f32 = 1.0;
 
 impl<P: Primitive> KdTree<P> {
     /// The bundle queries ([`walk_groups`](rt_core::bundle::walk_groups)): each bundle whose

@@ -782,15 +782,20 @@ mod tests {
         assert!(!report.disagreements.is_empty());
     }
 
-    /// A structure whose single queries are right (the wide tree's) but whose bundle queries
-    /// lose every hit on an even primitive.
+    /// The wide tree's single queries behind the default bundle loop (`BROKEN = false`: a
+    /// structure without a bundle traversal of its own), or behind its bundle queries with every
+    /// hit on an even primitive lost (`BROKEN = true`).
     #[derive(Debug)]
-    struct BundlesLoseEvenHits<P: rt_core::Primitive>(Bvh<P>);
+    struct WrappedBvh<P: rt_core::Primitive, const BROKEN: bool>(Bvh<P>);
 
-    impl<P: rt_core::Primitive> Accel for BundlesLoseEvenHits<P> {
+    impl<P: rt_core::Primitive, const BROKEN: bool> Accel for WrappedBvh<P, BROKEN> {
         type Prim = P;
         type Params = ();
-        const NAME: &'static str = "bundles-broken";
+        const NAME: &'static str = if BROKEN {
+            "bundles-broken"
+        } else {
+            "singles-only"
+        };
         fn presets() -> Vec<(&'static str, ())> {
             vec![("default", ())]
         }
@@ -809,6 +814,10 @@ mod tests {
             out: &mut [Option<Hit>],
             stats: &mut S,
         ) {
+            if !BROKEN {
+                rt_core::bundle::intersect_each(self, rays, out, stats);
+                return;
+            }
             self.0.intersect_bundle_with(rays, out, stats);
             for o in out.iter_mut() {
                 *o = o.filter(|h| h.prim % 2 == 1);
@@ -881,12 +890,17 @@ mod tests {
             .filter(|e| e.name == "bvh" || e.name == "bvh-binary")
             .collect();
         entries.push(structures::entry_of::<
-            BundlesLoseEvenHits<Triangle>,
-            BundlesLoseEvenHits<rt_core::Shape>,
+            WrappedBvh<Triangle, true>,
+            WrappedBvh<rt_core::Shape, true>,
+        >());
+        entries.push(structures::entry_of::<
+            WrappedBvh<Triangle, false>,
+            WrappedBvh<rt_core::Shape, false>,
         >());
         let report = measure(&a, 1, entries).unwrap();
         let row = |name: &str| report.rows.iter().find(|r| r.name == name).unwrap();
         let (bvh, binary, broken) = (row("bvh"), row("bvh-binary"), row("bundles-broken"));
+        let singles = row("singles-only");
         let even = bvh
             .answers
             .iter()
@@ -897,13 +911,18 @@ mod tests {
         assert_eq!(broken.mismatches, 0);
         assert_eq!(broken.bundle.as_ref().unwrap().differences, even);
         assert_eq!(report.total_mismatches(), even);
-        // The wide tree traces bundles (its lanes counted); the binary tree, without a bundle
-        // traversal, traces every ray alone.
-        let b = bvh.bundle.as_ref().unwrap();
-        assert_eq!(b.differences, 0);
-        assert!(b.lane_utilisation.is_some_and(|u| u > 0.0 && u <= 1.0));
-        assert!(b.avg_visits < bvh.avg_visits, "a bundle's step counts once");
-        let k = binary.bundle.as_ref().unwrap();
+        // Both trees trace bundles (their lanes counted); a structure without a bundle
+        // traversal traces every ray alone.
+        for tree in [bvh, binary] {
+            let b = tree.bundle.as_ref().unwrap();
+            assert_eq!(b.differences, 0, "{}", tree.name);
+            assert!(b.lane_utilisation.is_some_and(|u| u > 0.0 && u <= 1.0));
+            assert!(
+                b.avg_visits < tree.avg_visits,
+                "a bundle's step counts once"
+            );
+        }
+        let k = singles.bundle.as_ref().unwrap();
         assert_eq!((k.single_share, k.lane_utilisation), (1.0, None));
         let table = to_table(&report);
         assert!(

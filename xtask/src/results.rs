@@ -36,6 +36,9 @@ const ROWS: &str = "bvh,bvh-binary,bvh-median,bvh-middle,kdtree,kdtree-restart,g
 
 /// One structure of each kind, for the tables that compare kinds.
 const MAIN_ROWS: &str = "bvh,kdtree,grid,hgrid,octree";
+/// The rows of the bundle table: the main rows and the binary BVH, whose bundle walk differs
+/// from the wide tree's.
+const BUNDLE_ROWS: &str = "bvh,bvh-binary,kdtree,grid,hgrid,octree";
 
 /// The bunny, for the runs on a real mesh (the built-in scenes are procedural).
 const BUNNY: &str = "../shared/meshes/stanford-bunny.obj";
@@ -180,14 +183,24 @@ fn measure_all(args: &Args) -> Result<PathBuf, String> {
     shootout_table(&mut page, &run);
 
     page += "\n## Ray bundles\n\nThe same rays traced as bundles (`Accel::intersect_bundle`, \
-             `occluded_bundle`): primary rays in 8×8 pixel tiles and the shadow rays of their \
-             hits in that order, on one thread; each bundle pass timed right after the same \
-             row's single rays, every bundle answer checked bit for bit against the single \
-             answer. Structures without a bundle traversal trace every ray alone.\n\n";
+             `occluded_bundle`): primary rays of the filled view in 8×8 pixel tiles, the shadow \
+             rays of their hits in that order, and incoherent rays as they come (which bundles \
+             must not trace slower than single rays), on one thread; each bundle pass timed \
+             right after the same row's single rays, every bundle answer checked bit for bit \
+             against the single answer. Structures without a bundle traversal trace every ray \
+             alone.\n\n";
     let mut runs = Vec::new();
-    for kind in ["primary", "shadow"] {
+    for kind in ["primary", "shadow", "incoherent"] {
         for scene in &plan.bundles {
-            let mut argv = vec!["compare", "--scene", scene, "--rays", kind, "-s", MAIN_ROWS];
+            let mut argv = vec![
+                "compare",
+                "--scene",
+                scene,
+                "--rays",
+                kind,
+                "-s",
+                BUNDLE_ROWS,
+            ];
             argv.extend(["--bundle", "8x8", "-j", "1"]);
             argv.extend(&image);
             argv.push("--json");
@@ -491,7 +504,46 @@ fn bundle_table(page: &mut String, runs: &[Run]) {
             cells.join(" | ")
         );
     }
-    page.push_str("\nMrays/s of the bundles (their speed ÷ the same row's single rays).\n\n");
+    // The geometric mean of the ratios per ray kind, over the scenes: the figure the bundles
+    // are judged by.
+    let mut kinds: Vec<&str> = Vec::new();
+    for run in runs {
+        let kind = run.json["ray_kind"].as_str().unwrap_or("?");
+        if !kinds.contains(&kind) {
+            kinds.push(kind);
+        }
+    }
+    for kind in kinds {
+        let of_kind: Vec<&Run> = runs
+            .iter()
+            .filter(|r| r.json["ray_kind"].as_str() == Some(kind))
+            .collect();
+        let cells: Vec<String> = rows
+            .iter()
+            .map(|name| {
+                let ratios: Vec<f64> = of_kind
+                    .iter()
+                    .filter_map(|r| result(&r.json, name))
+                    .map(|r| f(&r["bundle"]["over_single"]))
+                    .filter(|x| *x > 0.0)
+                    .collect();
+                if ratios.is_empty() {
+                    return "-".into();
+                }
+                let mean = ratios.iter().map(|x| x.ln()).sum::<f64>() / ratios.len() as f64;
+                format!("**{:.2}×**", mean.exp())
+            })
+            .collect();
+        let _ = writeln!(
+            page,
+            "| geometric mean | {kind} | | {} |",
+            cells.join(" | ")
+        );
+    }
+    page.push_str(
+        "\nMrays/s of the bundles (their speed ÷ the same row's single rays); the last \
+                   rows, the geometric means of those ratios over the scenes.\n\n",
+    );
     for run in runs {
         let _ = writeln!(page, "- `{}`", run.command);
     }

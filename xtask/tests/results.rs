@@ -37,6 +37,13 @@ fn the_quick_page_has_every_section_and_its_commands() {
     );
     assert!(text.contains("| bvh | "), "{text}");
     assert!(text.contains("% of them hit"), "{text}");
+    // The bundle table ends with each ray kind's geometric mean.
+    for kind in ["primary", "shadow", "incoherent"] {
+        assert!(
+            text.contains(&format!("| geometric mean | {kind} |")),
+            "no {kind} mean in:\n{text}"
+        );
+    }
 }
 
 #[test]

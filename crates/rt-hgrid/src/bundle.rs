@@ -76,7 +76,10 @@ impl<P: Primitive> HGrid<P> {
             let walked = self.level::<S, ANY>(nested, (b, lanes_in), lanes, mailbox, alone, stats);
             *alone |= walked.alone;
             let mut leave = walked.alone;
-            let grazing = passing_by(b, &l.shape.cell_box(c), walked.missed);
+            let grazing = match walked.missed {
+                0 => 0,
+                missed => passing_by(b, &l.shape.cell_box(c), missed),
+            };
             if grazing != 0 {
                 // Lanes that graze the cell: its whole list, as the single walk tests a parent
                 // cell beside its path.

@@ -1,4 +1,4 @@
-//! Lab: a bounding volume hierarchy, in six steps.
+//! Lab: a bounding volume hierarchy, in seven steps.
 //!
 //! A BVH groups the triangles into a binary tree of boxes: each leaf lists a few triangles,
 //! each interior node's box holds its two children's. A ray enters a node only if it meets the
@@ -14,13 +14,14 @@
 //! 4. [`step4`]: the closest hit: a stack, nearest child first, and nothing beyond the best hit.
 //! 5. [`step5`]: the any-hit query (shadow rays): stop at the first hit.
 //! 6. [`step6`]: the surface area heuristic (SAH) instead of the median split.
+//! 7. [`step7`]: ray packets: up to 64 coherent rays down the tree together.
 //!
 //! Nothing outside the step files needs to change: this file holds the node layout, the
 //! split dispatcher, a `validate` for the tree, and wires the steps into the
 //! [`rt_core::Accel`] trait, so the conformance kit and the shootout can run your BVH.
 
 use rt_core::{
-    Aabb, Accel, BallQuery, BuildStats, Hit, Primitive, Ray, Region, Stats, Triangle,
+    Aabb, Accel, BallQuery, BuildStats, Bundle, Hit, Primitive, Ray, Region, Stats, Triangle,
     ValidationError, predicted_cost,
 };
 
@@ -30,6 +31,7 @@ pub mod step3;
 pub mod step4;
 pub mod step5;
 pub mod step6;
+pub mod step7;
 
 /// The deepest a tree may be: the traversal stack has room for this many nodes.
 pub const MAX_DEPTH: usize = 64;
@@ -37,6 +39,12 @@ pub const MAX_DEPTH: usize = 64;
 /// Below this depth the SAH chooses the splits; deeper, the median split does, so that even a
 /// scene the SAH splits badly (one triangle off per level) stays within [`MAX_DEPTH`].
 pub const SAH_DEPTH: usize = 24;
+
+/// The widest spread of directions (about the angle in radians, [`Bundle::direction_spread`])
+/// a bundle may have to walk as a packet (step 7); wider bundles go ray by ray. Rays that far
+/// apart share few boxes below the top of the tree, and carrying them together costs more than
+/// it saves.
+pub const MAX_SPREAD: f32 = 1.0;
 
 /// How the builder chooses where to split a node's triangles.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -55,6 +63,9 @@ pub struct BvhParams {
     /// A node of at most this many triangles becomes a leaf with the median split; the SAH may
     /// make leaves up to this size, and must split bigger nodes.
     pub leaf_size: usize,
+    /// Whether the bundle queries ([`Accel::intersect_bundle_with`]) trace coherent rays as
+    /// packets (step 7) rather than one ray at a time (the trait's default loop).
+    pub packets: bool,
 }
 
 impl Default for BvhParams {
@@ -62,6 +73,7 @@ impl Default for BvhParams {
         Self {
             split: Split::Median,
             leaf_size: 4,
+            packets: false,
         }
     }
 }
@@ -72,6 +84,15 @@ impl BvhParams {
         Self {
             split: Split::Sah,
             leaf_size: 8,
+            packets: false,
+        }
+    }
+
+    /// The SAH tree (step 6), its bundle queries traced as packets (step 7).
+    pub fn packets() -> Self {
+        Self {
+            packets: true,
+            ..Self::sah()
         }
     }
 }
@@ -244,6 +265,47 @@ impl LabBvh {
     }
 }
 
+impl LabBvh {
+    /// The bundle queries with packets: the first `slots` rays sorted into bundles by rt-core
+    /// ([`rt_core::bundle::walk_groups`]); a bundle that misses the root's box answered "no
+    /// hit" at once; one of directions within [`MAX_SPREAD`] walked by step 7; every other ray
+    /// traced by steps 4 and 5. Calls `answer(slot, answer)` for each ray, where an any-hit
+    /// answer is `Some` when the ray is blocked.
+    fn packet_query<S: Stats, const ANY: bool>(
+        &self,
+        rays: &[Ray],
+        slots: usize,
+        stats: &mut S,
+        answer: impl FnMut(usize, Option<Hit>),
+    ) {
+        let bounds = self.bounds();
+        rt_core::bundle::walk_groups::<S, ANY>(
+            rays,
+            slots,
+            stats,
+            |ray, stats| {
+                if ANY {
+                    step5::any_hit(self, ray, stats).then_some(Hit {
+                        prim: 0,
+                        t: f32::NAN,
+                        u: 0.0,
+                        v: 0.0,
+                    })
+                } else {
+                    step4::closest_hit(self, ray, stats)
+                }
+            },
+            |b: &Bundle| b.route(&bounds, |b| b.direction_spread() <= MAX_SPREAD),
+            |b, lanes, stats| {
+                step7::walk::<S, ANY>(self, b, lanes, stats);
+                // No lane is left to the single-ray walk.
+                0
+            },
+            answer,
+        );
+    }
+}
+
 /// Where to split a node's triangles `ids`, whose box is `bounds` and centroids' box
 /// `centroids`, at depth `depth`: reorders `ids` and returns how many of them go to the first
 /// child, or `None` to make a leaf. Dispatches on `params.split`, and guards the build: the SAH
@@ -280,7 +342,11 @@ impl Accel for LabBvh {
     const NAME: &'static str = "lab-bvh";
 
     fn presets() -> Vec<(&'static str, BvhParams)> {
-        vec![("default", BvhParams::default()), ("sah", BvhParams::sah())]
+        vec![
+            ("default", BvhParams::default()),
+            ("sah", BvhParams::sah()),
+            ("packets", BvhParams::packets()),
+        ]
     }
 
     fn build(prims: &[Triangle], params: &BvhParams) -> Self {
@@ -293,6 +359,31 @@ impl Accel for LabBvh {
 
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
         step5::any_hit(self, ray, stats)
+    }
+
+    /// With [`BvhParams::packets`], coherent rays go down the tree as packets (step 7).
+    fn intersect_bundle_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        stats: &mut S,
+    ) {
+        if self.params.packets {
+            self.packet_query::<S, false>(rays, out.len(), stats, |slot, hit| out[slot] = hit);
+        } else {
+            rt_core::bundle::intersect_each(self, rays, out, stats);
+        }
+    }
+
+    /// With [`BvhParams::packets`], coherent rays go down the tree as packets (step 7).
+    fn occluded_bundle_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
+        if self.params.packets {
+            self.packet_query::<S, true>(rays, out.len(), stats, |slot, hit| {
+                out[slot] = hit.is_some();
+            });
+        } else {
+            rt_core::bundle::occluded_each(self, rays, out, stats);
+        }
     }
 
     fn bounds(&self) -> Aabb {

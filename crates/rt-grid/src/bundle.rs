@@ -198,9 +198,6 @@ pub fn walk_slices(
     let frame = Frame::new(shape, b);
     let res = shape.resolution_per_axis();
     let (start, mut s) = start_slices(shape, lanes, frame.major, &t0, live, frame.forward);
-    // Each lane's segment bounds in the current slice along `u` and `v` (see `Frame::slice`).
-    let mut seg = [[0.0f32; BUNDLE_LANES]; 4];
-    let (mut by_u, mut by_v) = ([0u64; MAX_CELL_MASKS], [0u64; MAX_CELL_MASKS]);
     // What the bundle has cost so far and what single rays would have: cells times vector
     // steps, against the cells the lanes cross one by one.
     let (mut cost, mut single_cost) = (0.0f32, 0.0f32);
@@ -245,32 +242,20 @@ pub fn walk_slices(
             // hgrid 1.34x -> 1.41x; rocker-arm and teapot in a stadium unchanged within 3%.
             // From 4 cells, or for every rectangle of two cells or more, the masks cost more
             // than they saved on primary rays: the grid's bunny 4.13x -> 3.44x.
-            let per_cell = cells >= WIDE_RECTANGLE
-                && frame.segments(planes, b, crossing, &mut seg)
-                && frame.lanes_per_cell(
-                    shape,
-                    frame.u,
-                    (us, cut.u),
-                    (&seg[0], &seg[1]),
-                    crossing,
-                    &mut by_u,
-                )
-                && frame.lanes_per_cell(
-                    shape,
-                    frame.v,
-                    (vs, cut.v),
-                    (&seg[2], &seg[3]),
-                    crossing,
-                    &mut by_v,
-                );
+            let per_cell = if cells >= WIDE_RECTANGLE {
+                frame.cell_lanes(shape, planes, b, crossing, (us, cut.u), (vs, cut.v))
+            } else {
+                None
+            };
             let mut lanes_in = crossing;
             for cv in vs.0..=vs.1 {
                 for cu in us.0..=us.1 {
-                    let here = if per_cell {
-                        lanes_in
-                            & whole_steps(by_u[(cu - us.0) as usize] & by_v[(cv - vs.0) as usize])
-                    } else {
-                        lanes_in
+                    let here = match &per_cell {
+                        Some((by_u, by_v)) => {
+                            let (ku, kv) = ((cu - us.0) as usize, (cv - vs.0) as usize);
+                            lanes_in & whole_steps(by_u[ku] & by_v[kv])
+                        }
+                        None => lanes_in,
                     };
                     if here == 0 {
                         continue;
@@ -548,7 +533,7 @@ impl Frame {
 
     /// Each lane of `lanes`' smallest and largest coordinate along `u` and `v` between the
     /// slice's planes, into `seg` (`u` low, `u` high, `v` low, `v` high): the values
-    /// [`Frame::slice`] computes for its rectangle, by the same operations. Always true.
+    /// [`Frame::slice`] computes for its rectangle, by the same operations.
     #[inline(always)]
     fn segments(
         &self,
@@ -556,7 +541,7 @@ impl Frame {
         b: &Bundle,
         lanes: u64,
         seg: &mut [[f32; BUNDLE_LANES]; 4],
-    ) -> bool {
+    ) {
         let (om, ou, ov) = (&b.origin[self.major], &b.origin[self.u], &b.origin[self.v]);
         let mut m = lanes;
         while m != 0 {
@@ -568,7 +553,31 @@ impl Frame {
                 (seg[2 * k][i], seg[2 * k + 1][i]) = if a < z { (a, z) } else { (z, a) };
             }
         }
-        true
+    }
+
+    /// For a slice's rectangle of cells `u` by `v` (each the span and the rectangle's
+    /// coordinates it came from), the lanes of `lanes` that come near each column and each row
+    /// ([`Frame::lanes_per_cell`]), or `None` when the rectangle is too wide for them.
+    // PERF: kept out of the slice walk, with its arrays, so that the walk costs nothing more
+    // where rectangles stay narrow: inlined, the grid's incoherent rays ran at 0.96-0.98x their
+    // single rays against 1.00-1.01x before (`compare --rays incoherent --bundle 8x8 -j 1`,
+    // teapot in a stadium, sphereflake).
+    #[inline(never)]
+    fn cell_lanes(
+        &self,
+        shape: &GridShape,
+        planes: (u32, f32, f32),
+        b: &Bundle,
+        lanes: u64,
+        u: (Span, (f32, f32)),
+        v: (Span, (f32, f32)),
+    ) -> Option<([u64; MAX_CELL_MASKS], [u64; MAX_CELL_MASKS])> {
+        let mut seg = [[0.0f32; BUNDLE_LANES]; 4];
+        self.segments(planes, b, lanes, &mut seg);
+        let (mut by_u, mut by_v) = ([0u64; MAX_CELL_MASKS], [0u64; MAX_CELL_MASKS]);
+        let fits = self.lanes_per_cell(shape, self.u, u, (&seg[0], &seg[1]), lanes, &mut by_u)
+            && self.lanes_per_cell(shape, self.v, v, (&seg[2], &seg[3]), lanes, &mut by_v);
+        fits.then_some((by_u, by_v))
     }
 
     /// The bound on the rounding error of coordinates within `(lo, hi)` along `axis` (`u` or

@@ -572,6 +572,9 @@ impl<P: Primitive> Bvh<P> {
                     stats,
                     |ray, stats| self.query::<S, ANY>(ray, stats),
                     |b| b.route(&bounds, coherent),
+                    // Inlined, so that the walk is compiled with the vector instructions `walk_groups` runs
+                    // with (`Isa::run`).
+                    #[inline(always)]
                     |b, lanes, stats| {
                         bundle::binary_bundle::<P, S, ANY>(nodes, items, b, lanes, stats);
                         0

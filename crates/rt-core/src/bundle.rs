@@ -409,7 +409,8 @@ struct Bundler {
 impl Bundler {
     /// Splits `run` (at most [`BUNDLE_LANES`] rays, the first at index `base` of the slice)
     /// into its bundles and single rays.
-    fn run(&mut self, run: &[Ray], base: usize, visit: &mut impl FnMut(Group<'_>)) {
+    #[inline(always)]
+    fn run(&mut self, run: &[Ray], base: usize, mut visit: impl FnMut(Group<'_>)) {
         for (k, ray) in run.iter().enumerate() {
             let slot = base + k;
             if !bundles_ray(ray) {
@@ -467,6 +468,7 @@ pub fn walk_groups<S: Stats, const ANY: bool>(
         stats,
         single,
         route,
+        #[inline(always)]
         |b, stats| {
             let mut lanes = Lanes::new(b);
             let left = walk(b, &mut lanes, stats);
@@ -493,26 +495,53 @@ impl LaneAnswers for Lanes {
 
 /// [`walk_groups`] for a walk that keeps its lanes' answers in a type of its own: `walk(b,
 /// stats)` returns them and the lanes it leaves to single rays.
+///
+/// The whole loop runs compiled for the CPU's best vector instructions ([`Isa::run`]), and with
+/// it the walks, the single-ray walks and the kernels it inlines.
 pub fn walk_groups_with<S: Stats, A: LaneAnswers, const ANY: bool>(
     rays: &[Ray],
     slots: usize,
     stats: &mut S,
     mut single: impl FnMut(&Ray, &mut S) -> Option<Hit>,
     route: impl Fn(&Bundle) -> Route,
-    mut walk: impl FnMut(&Bundle, &mut S) -> (A, u64),
+    walk: impl FnMut(&Bundle, &mut S) -> (A, u64),
     mut answer: impl FnMut(usize, Option<Hit>),
 ) {
     let rays = &rays[..rays.len().min(slots)];
-    let mut alone = |ray: &Ray, stats: &mut S| {
-        stats.single_ray();
-        single(ray, stats)
-    };
     if rays.len() < 2 {
+        // One ray (or none) cannot make a bundle: straight to its single walk.
         for (slot, ray) in rays.iter().enumerate() {
-            answer(slot, alone(ray, stats));
+            answer(slot, alone(&mut single, ray, stats));
         }
         return;
     }
+    Isa::detect().run(
+        #[inline(always)]
+        move || walk_runs::<S, A, ANY>(rays, stats, single, route, walk, answer),
+    );
+}
+
+/// A ray traced singly, counted as one.
+#[inline(always)]
+fn alone<S: Stats>(
+    single: &mut impl FnMut(&Ray, &mut S) -> Option<Hit>,
+    ray: &Ray,
+    stats: &mut S,
+) -> Option<Hit> {
+    stats.single_ray();
+    single(ray, stats)
+}
+
+/// The body of [`walk_groups_with`], for two rays or more.
+#[inline(always)]
+fn walk_runs<S: Stats, A: LaneAnswers, const ANY: bool>(
+    rays: &[Ray],
+    stats: &mut S,
+    mut single: impl FnMut(&Ray, &mut S) -> Option<Hit>,
+    route: impl Fn(&Bundle) -> Route,
+    mut walk: impl FnMut(&Bundle, &mut S) -> (A, u64),
+    mut answer: impl FnMut(usize, Option<Hit>),
+) {
     // PERF: after a run of rays none of whose bundles walked, the next runs are traced singly
     // without sorting them into bundles: one after the first such run, doubling with each
     // further one up to `SKIP`, and back to none when a run walks. Rays in random directions
@@ -528,53 +557,61 @@ pub fn walk_groups_with<S: Stats, A: LaneAnswers, const ANY: bool>(
         if skip > 0 {
             skip -= 1;
             for (k, ray) in run.iter().enumerate() {
-                answer(base + k, alone(ray, stats));
+                answer(base + k, alone(&mut single, ray, stats));
             }
             continue;
         }
         if !may_cohere(run) {
             for (k, ray) in run.iter().enumerate() {
-                answer(base + k, alone(ray, stats));
+                answer(base + k, alone(&mut single, ray, stats));
             }
             continue;
         }
         let mut walked = false;
-        bundler.run(run, base, &mut |group| match group {
-            Group::Bundle(b) => match if b.len() > 1 { route(b) } else { Route::Singly } {
-                Route::Walk => {
-                    walked = true;
-                    let (answers, left) = walk(b, stats);
-                    for i in 0..b.len() {
-                        let slot = b.slot[i] as usize;
-                        if left >> i & 1 != 0 {
-                            answer(slot, alone(&rays[slot], stats));
-                        } else {
-                            let hit = answers.answer(i);
+        bundler.run(
+            run,
+            base,
+            #[inline(always)]
+            |group| match group {
+                Group::Bundle(b) => match if b.len() > 1 { route(b) } else { Route::Singly } {
+                    Route::Walk => {
+                        walked = true;
+                        let (answers, left) = walk(b, stats);
+                        for i in 0..b.len() {
+                            let slot = b.slot[i] as usize;
+                            if left >> i & 1 != 0 {
+                                answer(slot, alone(&mut single, &rays[slot], stats));
+                            } else {
+                                let hit = answers.answer(i);
+                                answer(
+                                    slot,
+                                    if ANY {
+                                        hit.map(|h| Hit { t: f32::NAN, ..h })
+                                    } else {
+                                        hit
+                                    },
+                                );
+                            }
+                        }
+                    }
+                    Route::Miss => {
+                        walked = true;
+                        for &slot in &b.slot[..b.len()] {
+                            answer(slot as usize, None);
+                        }
+                    }
+                    Route::Singly => {
+                        for &slot in &b.slot[..b.len()] {
                             answer(
-                                slot,
-                                if ANY {
-                                    hit.map(|h| Hit { t: f32::NAN, ..h })
-                                } else {
-                                    hit
-                                },
+                                slot as usize,
+                                alone(&mut single, &rays[slot as usize], stats),
                             );
                         }
                     }
-                }
-                Route::Miss => {
-                    walked = true;
-                    for &slot in &b.slot[..b.len()] {
-                        answer(slot as usize, None);
-                    }
-                }
-                Route::Singly => {
-                    for &slot in &b.slot[..b.len()] {
-                        answer(slot as usize, alone(&rays[slot as usize], stats));
-                    }
-                }
+                },
+                Group::Single(slot, ray) => answer(slot, alone(&mut single, ray, stats)),
             },
-            Group::Single(slot, ray) => answer(slot, alone(ray, stats)),
-        });
+        );
         if walked {
             backoff = 0;
         } else {

@@ -97,6 +97,9 @@ impl<P: Primitive> Grid<P> {
                     !self.refs.is_empty() && coherent(&self.shape, b)
                 })
             },
+            // Inlined, so that the walk is compiled with the vector instructions `walk_groups` runs
+            // with (`Isa::run`).
+            #[inline(always)]
             |b, lanes, stats| self.slices::<S, ANY>(b, lanes, stats),
             answer,
         );

@@ -32,6 +32,9 @@ impl<P: Primitive> HGrid<P> {
             stats,
             |ray, stats| self.walk::<S, ANY>(ray, stats),
             |b| b.route(&top.bounds(), |b| !self.refs.is_empty() && coherent(top, b)),
+            // Inlined, so that the walk is compiled with the vector instructions `walk_groups` runs
+            // with (`Isa::run`).
+            #[inline(always)]
             |b, lanes, stats| {
                 let mut mailbox = LaneMailbox::new();
                 let mut alone = 0;

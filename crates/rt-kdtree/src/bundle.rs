@@ -66,6 +66,9 @@ impl<P: Primitive> KdTree<P> {
                     !self.refs.is_empty() && b.direction_spread() <= MAX_SPREAD
                 })
             },
+            // Inlined, so that the walk is compiled with the vector instructions `walk_groups` runs
+            // with (`Isa::run`).
+            #[inline(always)]
             |b, lanes, stats| {
                 self.packet::<S, ANY>(b, lanes, stats);
                 0

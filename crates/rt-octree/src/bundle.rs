@@ -56,6 +56,9 @@ impl<P: Primitive> Octree<P> {
             stats,
             |ray, stats| self.walk::<S, ANY>(ray, stats),
             |b| b.route(&self.bounds, |b| !self.refs.is_empty() && coherent(b)),
+            // Inlined, so that the walk is compiled with the vector instructions `walk_groups` runs
+            // with (`Isa::run`).
+            #[inline(always)]
             |b, lanes, stats| {
                 self.packet::<S, ANY>(b, lanes, stats);
                 0

@@ -273,6 +273,7 @@ impl Lanes {
             ],
             t_min: &self.t_min[step],
             t_max: &self.t[step],
+            active: m,
         };
         let out = crate::simd::watertight8(self.isa, &verts, &input);
         let mut hit = 0u8;
@@ -443,6 +444,8 @@ pub(crate) struct Step8<'a> {
     pub shear: [&'a [f32; W]; 3],
     pub t_min: &'a [f32; W],
     pub t_max: &'a [f32; W],
+    /// The lanes whose outputs the caller reads; a kernel may leave the others' unset.
+    pub active: u8,
 }
 
 /// Eight lanes' watertight test: `t`, `u`, `v` of each, the lanes whose hit lies in their

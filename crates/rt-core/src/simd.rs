@@ -138,6 +138,18 @@ mod x86 {
             let neg = _mm256_or_ps(_mm256_or_ps(lt0(u), lt0(v)), lt0(w));
             let pos = _mm256_or_ps(_mm256_or_ps(gt0(u), gt0(v)), gt0(w));
             let outside = _mm256_and_ps(neg, pos);
+            // PERF: most lanes a triangle is tested against pass outside one of its edges;
+            // when all the active ones do (and none needs the scalar test), the division and
+            // the distance are skipped. The answer is the same: those lanes are not inside
+            // either way, and the caller reads no lane outside `active`. Bunny primary rays in
+            // 8×8 tiles, one thread, two alternating runs of 3 passes: the uniform grid's
+            // bundles 5.26 and 5.31 Mrays/s without, 5.40 and 5.44 with; the hierarchical
+            // grid's 4.09, 4.14 and 4.14, 4.19; the kd-tree's 11.26, 11.34 and 11.32, 11.54.
+            let zero_bits = _mm256_movemask_ps(any_zero) as u8;
+            let outside_bits = _mm256_movemask_ps(outside) as u8;
+            if (!outside_bits | zero_bits) & input.active == 0 {
+                return Out8::default();
+            }
             let det = _mm256_add_ps(_mm256_add_ps(u, v), w);
             // Ordered not-equal: false for NaN, as `det != 0.0 && !det.is_nan()`.
             let det_ok = _mm256_cmp_ps::<_CMP_NEQ_OQ>(det, zero);
@@ -159,7 +171,7 @@ mod x86 {
             let inside = _mm256_andnot_ps(outside, _mm256_and_ps(det_ok, in_range));
             let mut out = Out8 {
                 inside: _mm256_movemask_ps(inside) as u8,
-                zero: _mm256_movemask_ps(any_zero) as u8,
+                zero: zero_bits,
                 ..Out8::default()
             };
             _mm256_storeu_ps(out.t.as_mut_ptr(), t);

@@ -52,6 +52,27 @@ pub(crate) struct Answers {
 }
 
 impl rt_core::bundle::LaneAnswers for Answers {
+    fn blank() -> Self {
+        Self {
+            best: [NO_HIT; BUNDLE_LANES],
+            t: [f32::NEG_INFINITY; BUNDLE_LANES],
+            alive: 0,
+        }
+    }
+
+    /// No lane hit yet: each lane's best `t` is its `t_max`; lanes past the bundle's end hold
+    /// `-inf`.
+    #[inline(always)]
+    fn reset(&mut self, b: &Bundle) {
+        let n = b.len();
+        for (h, &t) in self.best[..n].iter_mut().zip(&b.t_max[..n]) {
+            *h = Hit { t, ..NO_HIT };
+        }
+        self.t[..n].copy_from_slice(&b.t_max[..n]);
+        self.t[n..].fill(f32::NEG_INFINITY);
+        self.alive = b.all_lanes();
+    }
+
     /// The lane's best hit; for an any-hit query, `Some` when it left blocked (a lane of an
     /// any-hit query records no hit while it traces).
     #[inline(always)]
@@ -61,26 +82,15 @@ impl rt_core::bundle::LaneAnswers for Answers {
     }
 }
 
-impl Answers {
-    pub fn new(b: &Bundle) -> Self {
-        let mut best = [Hit {
-            prim: u32::MAX,
-            t: 0.0,
-            u: 0.0,
-            v: 0.0,
-        }; BUNDLE_LANES];
-        for (h, &t) in best.iter_mut().zip(&b.t_max) {
-            h.t = t;
-        }
-        let mut t = [f32::NEG_INFINITY; BUNDLE_LANES];
-        t[..b.len()].copy_from_slice(&b.t_max[..b.len()]);
-        Self {
-            best,
-            t,
-            alive: b.all_lanes(),
-        }
-    }
+/// A lane's best before any hit.
+const NO_HIT: Hit = Hit {
+    prim: u32::MAX,
+    t: 0.0,
+    u: 0.0,
+    v: 0.0,
+};
 
+impl Answers {
     /// The largest best `t` of the live lanes: no lane can use a box entered beyond it. (A lane
     /// that has left, and every lane past the bundle's end, holds `-inf`.)
     // PERF: written over whole vectors of lanes, which the compiler turns into `maxps`: a loop

@@ -598,10 +598,9 @@ impl<P: Primitive> Bvh<P> {
             stats,
             |ray, stats| self.query::<S, ANY>(ray, stats),
             |b| b.route(&bounds, coherent),
-            |b, stats| {
-                let mut answers = Answers::new(b);
-                wide.bundle::<S, ANY>(b, &mut answers, stats);
-                (answers, 0)
+            |b, answers, stats| {
+                wide.bundle::<S, ANY>(b, answers, stats);
+                0
             },
             answer,
         );

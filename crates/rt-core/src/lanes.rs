@@ -32,14 +32,16 @@ const STEPS: usize = BUNDLE_LANES / W;
 /// The lanes of one [`Bundle`] with each lane's watertight shear and best hit so far.
 #[derive(Clone, Debug)]
 pub struct Lanes {
-    /// Each lane's ray, the same bits as the bundle's (and the ray it came from).
-    pub rays: [Ray; BUNDLE_LANES],
     /// `sx`, `sy`, `sz` of each lane's [`Shear`].
     shear: [[[f32; W]; STEPS]; 3],
     /// The bundle's origins, per axis and step.
     origin: [[[f32; W]; STEPS]; 3],
-    /// `t_min` per lane.
+    /// The bundle's directions and their reciprocals, per axis and step, for [`Lanes::ray`].
+    dir: [[[f32; W]; STEPS]; 3],
+    inv_dir: [[[f32; W]; STEPS]; 3],
+    /// `t_min` and the ray's own `t_max` per lane.
     t_min: [[f32; W]; STEPS],
+    t_max: [[f32; W]; STEPS],
     /// The lanes whose dominant axis ([`Shear::kz`]) is `a`, for each axis `a`.
     by_axis: [u64; 3],
     /// The axis order `[kx, ky, kz]` of the lanes whose dominant axis is `a` (the bundle's one
@@ -65,40 +67,130 @@ impl Lanes {
     /// [`Lanes::new`] with the kernels' instruction set chosen by the caller (the tests run
     /// each one); an instruction set this CPU lacks falls back to the portable kernels.
     pub fn with_isa(bundle: &Bundle, isa: crate::simd::Isa) -> Self {
+        let mut lanes = Self::blank(isa);
+        lanes.reset(bundle);
+        lanes
+    }
+
+    /// Lanes of no bundle yet, for [`Lanes::reset`], with the kernels of `isa` (the portable
+    /// ones if this CPU lacks it).
+    pub fn blank(isa: crate::simd::Isa) -> Self {
         let isa = if isa == crate::simd::Isa::detect_ignoring_env() {
             isa
         } else {
             crate::simd::Isa::Portable
         };
-        let mut lanes = Self {
-            rays: [Ray::new(glam::Vec3::ZERO, glam::Vec3::X); BUNDLE_LANES],
+        Self {
             shear: [[[0.0; W]; STEPS]; 3],
             origin: [[[0.0; W]; STEPS]; 3],
+            dir: [[[0.0; W]; STEPS]; 3],
+            inv_dir: [[[0.0; W]; STEPS]; 3],
             t_min: [[0.0; W]; STEPS],
+            t_max: [[0.0; W]; STEPS],
             by_axis: [0; 3],
             order: [[0, 1, 2], [2, 0, 1], [1, 2, 0]],
             t: [[f32::NAN; W]; STEPS],
             prim: [[u32::MAX; W]; STEPS],
             uv: [[[0.0; W]; STEPS]; 2],
             isa,
-        };
-        for i in 0..bundle.len() {
-            let ray = bundle.ray(i);
-            let s = Shear::new(ray.dir());
-            let (step, j) = (i / W, i % W);
-            lanes.shear[0][step][j] = s.sx;
-            lanes.shear[1][step][j] = s.sy;
-            lanes.shear[2][step][j] = s.sz;
-            for a in 0..3 {
-                lanes.origin[a][step][j] = bundle.origin[a][i];
-            }
-            lanes.t_min[step][j] = ray.t_min;
-            lanes.t[step][j] = ray.t_max;
-            lanes.by_axis[s.kz] |= 1 << i;
-            lanes.order[s.kz] = [s.kx, s.ky, s.kz];
-            lanes.rays[i] = ray;
         }
-        lanes
+    }
+
+    /// Makes these the lanes of `bundle`, none hit yet, in place (a walk over many bundles
+    /// keeps one `Lanes`). Lanes past the bundle's length keep NaN as their best `t` and no
+    /// primitive; the other arrays past it are never read for an answer.
+    ///
+    /// Each lane's shear is [`Shear::new`] of its direction, eight lanes at a time: the same
+    /// comparisons pick the dominant axis, and the same division and products make the
+    /// factors, so every lane's are the scalar ones, bit for bit.
+    // PERF: made lane by lane (each ray gathered back from the bundle, its shear made alone,
+    // the whole ray kept for the scalar fallbacks) and moved out by value for every bundle,
+    // this was a third of the time around a bundle walk; see `walk_groups_with` for the
+    // figures.
+    #[inline(always)]
+    pub fn reset(&mut self, bundle: &Bundle) {
+        let n = bundle.len();
+        for a in 0..3 {
+            self.origin[a].as_flattened_mut()[..n].copy_from_slice(&bundle.origin[a][..n]);
+            self.dir[a].as_flattened_mut()[..n].copy_from_slice(&bundle.dir[a][..n]);
+            self.inv_dir[a].as_flattened_mut()[..n].copy_from_slice(&bundle.inv_dir[a][..n]);
+        }
+        self.t_min.as_flattened_mut()[..n].copy_from_slice(&bundle.t_min[..n]);
+        self.t_max.as_flattened_mut()[..n].copy_from_slice(&bundle.t_max[..n]);
+        let t = self.t.as_flattened_mut();
+        t[..n].copy_from_slice(&bundle.t_max[..n]);
+        t[n..].fill(f32::NAN);
+        self.prim.as_flattened_mut().fill(u32::MAX);
+        // Given the dominant axis `kz`, the other two as `Shear::new` orders them: swapped
+        // when the direction along `kz` is negative, which the bundle's octant says for all.
+        let octant = bundle.octant();
+        for (kz, order) in self.order.iter_mut().enumerate() {
+            let kx = if kz == 2 { 0 } else { kz + 1 };
+            let ky = if kx == 2 { 0 } else { kx + 1 };
+            *order = if octant >> kz & 1 != 0 {
+                [ky, kx, kz]
+            } else {
+                [kx, ky, kz]
+            };
+        }
+        let order = self.order;
+        self.by_axis = [0; 3];
+        for step in 0..n.div_ceil(W) {
+            // Not `array::map`, whose closure is not inlined into the walks' vector frame.
+            let d = [self.dir[0][step], self.dir[1][step], self.dir[2][step]];
+            let mut kz = [0u8; W];
+            for j in 0..W {
+                let (ax, ay, az) = (d[0][j].abs(), d[1][j].abs(), d[2][j].abs());
+                // `Shear::new`'s choice: x if it is at least both others, else y if it is at
+                // least z, else z.
+                let x = (ax >= ay) & (ax >= az);
+                let y = !x & (ay >= az);
+                kz[j] = if x {
+                    0
+                } else if y {
+                    1
+                } else {
+                    2
+                };
+                let pick = |k: usize| {
+                    if x {
+                        d[order[0][k]][j]
+                    } else if y {
+                        d[order[1][k]][j]
+                    } else {
+                        d[order[2][k]][j]
+                    }
+                };
+                // Lanes past the bundle's length may divide by zero here: an infinity never
+                // read.
+                let sz = 1.0 / pick(2);
+                self.shear[0][step][j] = pick(0) * sz;
+                self.shear[1][step][j] = pick(1) * sz;
+                self.shear[2][step][j] = sz;
+            }
+            for (j, &k) in kz.iter().enumerate() {
+                let i = step * W + j;
+                if i < n {
+                    self.by_axis[k as usize] |= 1 << i;
+                }
+            }
+        }
+    }
+
+    /// Lane `i` as a ray: the same bits as the ray it came from.
+    #[inline]
+    pub fn ray(&self, i: usize) -> Ray {
+        let (step, j) = (i / W, i % W);
+        let v = |a: &[[[f32; W]; STEPS]; 3]| {
+            glam::Vec3::new(a[0][step][j], a[1][step][j], a[2][step][j])
+        };
+        Ray::from_parts(
+            v(&self.origin),
+            v(&self.dir),
+            v(&self.inv_dir),
+            self.t_min[step][j],
+            self.t_max[step][j],
+        )
     }
 
     /// Lane `i`'s best `t` so far (its `t_max` while it has no hit).
@@ -200,7 +292,7 @@ impl Lanes {
         while m != 0 {
             let i = m.trailing_zeros() as usize;
             m &= m - 1;
-            if let Some(h) = prim.intersect(&self.rays[i], self.t(i)) {
+            if let Some(h) = prim.intersect(&self.ray(i), self.t(i)) {
                 if ANY {
                     self.prim[i / W][i % W] = id;
                     hit |= 1 << i;
@@ -298,8 +390,8 @@ impl Lanes {
             let j = rest.trailing_zeros() as usize;
             rest &= rest - 1;
             let i = step * W + j;
-            let ray = &self.rays[i];
-            if let Some(h) = tri.intersect_sheared(&Shear::new(ray.dir()), ray, self.t(i)) {
+            let ray = self.ray(i);
+            if let Some(h) = tri.intersect_sheared(&Shear::new(ray.dir()), &ray, self.t(i)) {
                 if ANY {
                     self.prim[step][j] = id;
                     hit |= 1 << j;

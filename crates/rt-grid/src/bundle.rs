@@ -183,10 +183,8 @@ pub fn walk_slices(
     while m != 0 {
         let i = m.trailing_zeros() as usize;
         m &= m - 1;
-        if let Some((a, z)) = shape
-            .bounds()
-            .intersect(&lanes.rays[i], lanes.rays[i].t_max)
-        {
+        let ray = lanes.ray(i);
+        if let Some((a, z)) = shape.bounds().intersect(&ray, ray.t_max) {
             (t0[i], t1[i]) = (a, z);
             live |= 1 << i;
         }
@@ -309,7 +307,7 @@ fn start_slices(
     while m != 0 {
         let i = m.trailing_zeros() as usize;
         m &= m - 1;
-        let k = first_cell(shape, &RayAxes::new(&lanes.rays[i]), major, t0[i]);
+        let k = first_cell(shape, &RayAxes::new(&lanes.ray(i)), major, t0[i]);
         start[i] = if forward {
             k.saturating_sub(1)
         } else {

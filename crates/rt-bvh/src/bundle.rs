@@ -12,20 +12,23 @@
 //!   own slab arithmetic (the single ray's [`slab8`](crate::kernels::slab8), lane by lane), giving
 //!   the exact mask of lanes that enter it;
 //! - children are visited nearest first by their interval entry bound, pushed with their lane
-//!   masks; a leaf tests its items against each lane of its mask with the single ray's leaf test.
+//!   masks; a leaf of watertight triangle packs tests each triangle against eight lanes at a
+//!   time (rt-core's [`Lanes`], ray-parallel as Embree's packet kernels are) where its lanes
+//!   fill enough vectors of eight, else each lane alone with its single ray's leaf test
+//!   (triangle-parallel, four triangles at a time), as `Leaves::test_lanes` decides.
 //!
 //! So every lane tests a superset of the primitives its single ray tests (the interval test is
 //! conservative, see [`rt_core::Bundle::may_enter`], and the lane tests are the single ray's),
 //! each with the single ray's arithmetic, and keeps the best by the same tie rule: its answer is
 //! the single ray's, bit for bit.
 
-use crate::kernels::{BoxRay, RayData, Simd};
+use crate::kernels::Simd;
 use crate::node::{ChildRef, Node, WIDTH, WideNode};
 use crate::simd::Stack;
 use crate::traverse::{Leaves, WIDE_STACK};
 use crate::{Items, MAX_DEPTH};
 use rt_core::bundle::{Bundle, Lanes, narrow};
-use rt_core::{BUNDLE_LANES, Hit, Primitive, SLAB_FAR_SCALE, Shear, Stats};
+use rt_core::{BUNDLE_LANES, Primitive, SLAB_FAR_SCALE, Stats};
 
 /// The most the lanes' directions may spread ([`Bundle::direction_spread`], about radians) for
 /// the bundle to walk together; wider bundles go singly.
@@ -42,73 +45,6 @@ pub(crate) const MAX_SPREAD: f32 = 1.0;
 
 /// Vectors of eight lanes in a bundle of [`BUNDLE_LANES`].
 const GROUPS: usize = BUNDLE_LANES / 8;
-
-/// Each lane's best hit so far, and its `t` in an array of its own for the vector slab tests.
-pub(crate) struct Answers {
-    pub best: [Hit; BUNDLE_LANES],
-    pub t: [f32; BUNDLE_LANES],
-    /// Lanes still tracing: an any-hit lane leaves at its first hit.
-    pub alive: u64,
-}
-
-impl rt_core::bundle::LaneAnswers for Answers {
-    fn blank() -> Self {
-        Self {
-            best: [NO_HIT; BUNDLE_LANES],
-            t: [f32::NEG_INFINITY; BUNDLE_LANES],
-            alive: 0,
-        }
-    }
-
-    /// No lane hit yet: each lane's best `t` is its `t_max`; lanes past the bundle's end hold
-    /// `-inf`.
-    #[inline(always)]
-    fn reset(&mut self, b: &Bundle) {
-        let n = b.len();
-        for (h, &t) in self.best[..n].iter_mut().zip(&b.t_max[..n]) {
-            *h = Hit { t, ..NO_HIT };
-        }
-        self.t[..n].copy_from_slice(&b.t_max[..n]);
-        self.t[n..].fill(f32::NEG_INFINITY);
-        self.alive = b.all_lanes();
-    }
-
-    /// The lane's best hit; for an any-hit query, `Some` when it left blocked (a lane of an
-    /// any-hit query records no hit while it traces).
-    #[inline(always)]
-    fn answer(&self, i: usize) -> Option<Hit> {
-        let best = self.best[i];
-        (self.alive >> i & 1 == 0 || best.prim != u32::MAX).then_some(best)
-    }
-}
-
-/// A lane's best before any hit.
-const NO_HIT: Hit = Hit {
-    prim: u32::MAX,
-    t: 0.0,
-    u: 0.0,
-    v: 0.0,
-};
-
-impl Answers {
-    /// The largest best `t` of the live lanes: no lane can use a box entered beyond it. (A lane
-    /// that has left, and every lane past the bundle's end, holds `-inf`.)
-    // PERF: written over whole vectors of lanes, which the compiler turns into `maxps`: a loop
-    // over the live lanes' bits with `f32::max` was a tenth of the bundle traversal's samples
-    // (`perf record`, bunny primary rays, 8×8 tiles). Bunny at half the framing distance, single
-    // thread, two alternating runs each: primary bundles 26.1 -> 24.4 ms, shadow 18.2 -> 16.9.
-    #[inline(always)]
-    fn t_hi(&self) -> f32 {
-        let mut hi = [f32::NEG_INFINITY; 8];
-        for lanes in self.t.as_chunks::<8>().0 {
-            for (h, &t) in hi.iter_mut().zip(lanes) {
-                *h = if t > *h { t } else { *h };
-            }
-        }
-        hi.into_iter()
-            .fold(f32::NEG_INFINITY, |a, b| if b > a { b } else { a })
-    }
-}
 
 /// The interval test of all eight children against the bundle: a bit mask of the children some
 /// lane may enter, and a lower bound of every lane's entry distance into each. Lane by lane of
@@ -144,7 +80,7 @@ fn interval8<X: Simd>(s: X, node: &WideNode, b: &Bundle, t_hi: f32) -> (u32, [f3
 }
 
 /// For each child in `children`, the lanes of `active` that enter it: each lane's own slab test
-/// against its own best `t`, eight lanes per vector, the operations of
+/// against its own best `t` (`t_max`), eight lanes per vector, the operations of
 /// [`slab8`](crate::kernels::slab8) in the same order.
 #[inline(always)]
 fn lanes_entering<X: Simd>(
@@ -152,7 +88,7 @@ fn lanes_entering<X: Simd>(
     node: &WideNode,
     children: u32,
     b: &Bundle,
-    answers: &Answers,
+    t_max: &[f32; BUNDLE_LANES],
     active: u64,
 ) -> [u64; WIDTH] {
     let mut lanes = [0u64; WIDTH];
@@ -170,7 +106,7 @@ fn lanes_entering<X: Simd>(
         let at = |v: &[f32; BUNDLE_LANES]| s.load8(&v.as_chunks::<8>().0[g]);
         let o = [at(&b.origin[0]), at(&b.origin[1]), at(&b.origin[2])];
         let inv = [at(&b.inv_dir[0]), at(&b.inv_dir[1]), at(&b.inv_dir[2])];
-        let (t_min, t_max) = (at(&b.t_min), at(&answers.t));
+        let (t_min, t_max) = (at(&b.t_min), at(t_max));
         let mut m = children;
         while m != 0 {
             let c = m.trailing_zeros() as usize;
@@ -192,28 +128,29 @@ fn lanes_entering<X: Simd>(
 }
 
 /// The bundle traversal core, shared by closest hit (`ANY = false`) and any hit (`ANY = true`):
-/// fills `answers` for the lanes of `b`.
+/// records each lane's hits in `lanes`.
 #[inline(always)]
 pub(crate) fn wide_bundle<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
     simd: X,
     nodes: &[WideNode],
     leaves: &L,
     b: &Bundle,
-    answers: &mut Answers,
+    lanes: &mut Lanes,
     stats: &mut S,
 ) {
     let mut stack = Stack::<(u32, u64, f32), WIDE_STACK>::new();
     let (mut current, mut active) = (ChildRef::node(0), b.all_lanes());
-    let mut t_hi = answers.t_hi();
-    let mut lane_rays: [Option<(rt_core::Ray, Shear)>; BUNDLE_LANES] = [None; BUNDLE_LANES];
+    // Lanes still tracing: an any-hit lane leaves at its first hit.
+    let mut live = b.all_lanes();
+    let mut t_hi = lanes.far_end();
     loop {
         stats.node_visit();
         stats.bundle_lanes(b.len() as u32, active.count_ones());
         if !current.is_leaf() {
             let node = &nodes[current.index()];
             let (children, t_entry) = interval8(simd, node, b, t_hi);
-            let lanes = if children != 0 {
-                lanes_entering(simd, node, children, b, answers, active)
+            let entering = if children != 0 {
+                lanes_entering(simd, node, children, b, lanes.best_t(), active)
             } else {
                 [0; WIDTH]
             };
@@ -225,10 +162,10 @@ pub(crate) fn wide_bundle<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
             while m != 0 {
                 let c = m.trailing_zeros() as usize;
                 m &= m - 1;
-                if lanes[c] == 0 {
+                if entering[c] == 0 {
                     continue;
                 }
-                let e = (node.children[c], lanes[c], t_entry[c]);
+                let e = (node.children[c], entering[c], t_entry[c]);
                 let mut j = n;
                 while !ANY && j > 0 && order[j - 1].2 < e.2 {
                     order[j] = order[j - 1];
@@ -245,38 +182,20 @@ pub(crate) fn wide_bundle<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
                 continue;
             }
         } else {
-            let mut m = active & answers.alive;
-            while m != 0 {
-                let i = m.trailing_zeros() as usize;
-                m &= m - 1;
-                // Each lane's ray (its reciprocal direction: three divisions) and shear (three
-                // more) are made at its first leaf only.
-                let (ray, shear) = *lane_rays[i].get_or_insert_with(|| {
-                    let ray = b.ray(i);
-                    (ray, Shear::new(ray.dir()))
-                });
-                let r = RayData::with_shear(simd, &ray, BoxRay::new(simd, &ray), shear);
-                let best = &mut answers.best[i];
-                if leaves.test::<X, S, ANY>(simd, current.items(), &r, &ray, best, stats) {
-                    answers.alive &= !(1 << i);
-                    answers.t[i] = f32::NEG_INFINITY;
-                } else {
-                    answers.t[i] = best.t;
-                }
-            }
-            if ANY && answers.alive == 0 {
+            live &= !leaves.test_lanes::<X, S, ANY>(simd, current.items(), lanes, active, stats);
+            if ANY && live == 0 {
                 return;
             }
-            t_hi = answers.t_hi();
+            t_hi = lanes.far_end();
         }
         // Pop the next subtree that some live lane may still need.
         loop {
-            let Some((child, lanes, t)) = stack.pop() else {
+            let Some((child, entered, t)) = stack.pop() else {
                 return;
             };
-            let lanes = lanes & answers.alive;
-            if lanes != 0 && (ANY || t <= t_hi * SLAB_FAR_SCALE) {
-                (current, active) = (ChildRef(child), lanes);
+            let entered = entered & live;
+            if entered != 0 && (ANY || t <= t_hi * SLAB_FAR_SCALE) {
+                (current, active) = (ChildRef(child), entered);
                 break;
             }
         }

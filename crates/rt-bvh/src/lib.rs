@@ -198,8 +198,7 @@ pub use instance::Instances;
 pub use node::{ChildRef, Node, PACK, TriPack, WIDTH, WideNode};
 pub use rt_core::ValidationError;
 
-use bundle::Answers;
-use rt_core::bundle::Bundle;
+use rt_core::bundle::{Bundle, Lanes};
 use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, Stats, TriangleTest};
 use simd::Isa;
 use traverse::{Packs, Prims, ScalarPacks};
@@ -592,14 +591,14 @@ impl<P: Primitive> Bvh<P> {
             }
         };
         let bounds = self.root_bounds();
-        rt_core::bundle::walk_groups_with::<S, Answers, ANY>(
+        rt_core::bundle::walk_groups::<S, ANY>(
             rays,
             slots,
             stats,
             |ray, stats| self.query::<S, ANY>(ray, stats),
             |b| b.route(&bounds, coherent),
-            |b, answers, stats| {
-                wide.bundle::<S, ANY>(b, answers, stats);
+            |b, lanes, stats| {
+                wide.bundle::<S, ANY>(b, lanes, stats);
                 0
             },
             answer,
@@ -627,7 +626,7 @@ impl<S: Stats, const ANY: bool, const SORT: bool> LeafWalk for OneRay<'_, S, ANY
 }
 
 /// One bundle through [`bundle::wide_bundle`].
-struct OneBundle<'a, S, const ANY: bool>(&'a Bundle, &'a mut Answers, &'a mut S);
+struct OneBundle<'a, S, const ANY: bool>(&'a Bundle, &'a mut Lanes, &'a mut S);
 
 impl<S: Stats, const ANY: bool> LeafWalk for OneBundle<'_, S, ANY> {
     type Out = ();
@@ -672,8 +671,8 @@ impl<P: Primitive> Wide<P> {
     }
 
     /// The bundle traversal with this tree's leaves and kernels.
-    fn bundle<S: Stats, const ANY: bool>(&self, b: &Bundle, answers: &mut Answers, stats: &mut S) {
-        self.with_leaves(OneBundle::<S, ANY>(b, answers, stats));
+    fn bundle<S: Stats, const ANY: bool>(&self, b: &Bundle, lanes: &mut Lanes, stats: &mut S) {
+        self.with_leaves(OneBundle::<S, ANY>(b, lanes, stats));
     }
 
     /// The wide traversal with this tree's leaves, kernels and child ordering.

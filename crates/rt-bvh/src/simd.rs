@@ -15,13 +15,13 @@
 //!   entries it will never use; it reads a slot only after writing it.
 #![allow(unsafe_code)]
 
-use crate::bundle::{Answers, wide_bundle};
+use crate::bundle::wide_bundle;
 use crate::kernels::Portable;
 #[cfg(target_arch = "x86_64")]
 use crate::kernels::Simd;
 use crate::node::WideNode;
 use crate::traverse::{Leaves, wide};
-use rt_core::bundle::Bundle;
+use rt_core::bundle::{Bundle, Lanes};
 use rt_core::{Hit, Ray, Stats};
 use std::mem::MaybeUninit;
 
@@ -94,7 +94,7 @@ pub(crate) fn dispatch_bundle<L: Leaves, S: Stats, const ANY: bool>(
     nodes: &[WideNode],
     leaves: &L,
     b: &Bundle,
-    answers: &mut Answers,
+    lanes: &mut Lanes,
     stats: &mut S,
 ) {
     match isa {
@@ -102,12 +102,12 @@ pub(crate) fn dispatch_bundle<L: Leaves, S: Stats, const ANY: bool>(
         // SAFETY: an `Avx2` value exists only if `Avx2::detect` found AVX2 and FMA on this CPU,
         // which is all `bundle_avx2` requires.
         Isa::Avx2(simd) => unsafe {
-            bundle_avx2::<L, S, ANY>(simd, nodes, leaves, b, answers, stats)
+            bundle_avx2::<L, S, ANY>(simd, nodes, leaves, b, lanes, stats)
         },
         #[cfg(target_arch = "x86_64")]
-        Isa::Sse2 => wide_bundle::<Sse2, L, S, ANY>(Sse2, nodes, leaves, b, answers, stats),
+        Isa::Sse2 => wide_bundle::<Sse2, L, S, ANY>(Sse2, nodes, leaves, b, lanes, stats),
         Isa::Portable => {
-            wide_bundle::<Portable, L, S, ANY>(Portable, nodes, leaves, b, answers, stats)
+            wide_bundle::<Portable, L, S, ANY>(Portable, nodes, leaves, b, lanes, stats)
         }
     }
 }
@@ -120,10 +120,10 @@ fn bundle_avx2<L: Leaves, S: Stats, const ANY: bool>(
     nodes: &[WideNode],
     leaves: &L,
     b: &Bundle,
-    answers: &mut Answers,
+    lanes: &mut Lanes,
     stats: &mut S,
 ) {
-    wide_bundle::<Avx2, L, S, ANY>(simd, nodes, leaves, b, answers, stats);
+    wide_bundle::<Avx2, L, S, ANY>(simd, nodes, leaves, b, lanes, stats);
 }
 
 #[cfg(target_arch = "x86_64")]

@@ -225,6 +225,55 @@ impl Lanes {
             .fold(f32::NEG_INFINITY, |a, b| if b > a { b } else { a })
     }
 
+    /// Lane `i`'s best hit so far: primitive `u32::MAX` (and `t` its `t_max`) while it has
+    /// none, as a single-ray walk starts its own.
+    #[inline(always)]
+    pub fn best(&self, i: usize) -> Hit {
+        let (step, j) = (i / W, i % W);
+        Hit {
+            prim: self.prim[step][j],
+            t: self.t[step][j],
+            u: self.uv[0][step][j],
+            v: self.uv[1][step][j],
+        }
+    }
+
+    /// Lane `i`'s watertight [`Shear`], the one [`Shear::new`] makes of its direction.
+    #[inline(always)]
+    pub fn shear(&self, i: usize) -> Shear {
+        let (step, j) = (i / W, i % W);
+        let kz = if self.by_axis[0] >> i & 1 != 0 {
+            0
+        } else if self.by_axis[1] >> i & 1 != 0 {
+            1
+        } else {
+            2
+        };
+        let [kx, ky, kz] = self.order[kz];
+        Shear {
+            kx,
+            ky,
+            kz,
+            sx: self.shear[0][step][j],
+            sy: self.shear[1][step][j],
+            sz: self.shear[2][step][j],
+        }
+    }
+
+    /// Keeps `hit` as lane `i`'s best if it beats it ([`Hit::beats`]): for a walk that tests a
+    /// lane on its own, with its single-ray test, and hands back what it found.
+    #[inline(always)]
+    pub fn offer_hit(&mut self, i: usize, hit: Hit) {
+        self.offer(i, hit.prim, hit.t, hit.u, hit.v);
+    }
+
+    /// Records that primitive `id` blocks lane `i` (an any-hit query), as
+    /// [`Lanes::occluded`] records the lanes it blocks: the lane's answer becomes `Some`.
+    #[inline(always)]
+    pub fn block(&mut self, i: usize, id: u32) {
+        self.prim[i / W][i % W] = id;
+    }
+
     /// Lane `i`'s answer: its closest hit, if any.
     #[inline(always)]
     pub fn hit(&self, i: usize) -> Option<Hit> {

@@ -215,6 +215,7 @@ pub(crate) fn wide_bundle<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
 /// them (within [`SLAB_FAR_SCALE`], as the single walk allows), so the lane tests the
 /// primitive; every hit it records is a true hit of its own test, so the closest by the tie
 /// rule is its single ray's answer.
+#[inline(always)]
 pub(crate) fn binary_bundle<P: Primitive, S: Stats, const ANY: bool>(
     nodes: &[Node],
     items: &Items<P>,

@@ -323,23 +323,26 @@ impl Bundle {
     #[inline(always)]
     pub fn lanes_entering(&self, bounds: &Aabb, t_max: &[f32; BUNDLE_LANES], active: u64) -> u64 {
         const W: usize = 8;
-        let planes = [0, 1, 2].map(|a| {
+        // Written out axis by axis: closures passed to `array::map` are not inlined into the
+        // vector frame the walks run in (`Isa::run`).
+        let plane = |a: usize| {
             if self.octant >> a & 1 != 0 {
                 (bounds.max[a], bounds.min[a])
             } else {
                 (bounds.min[a], bounds.max[a])
             }
-        });
+        };
+        let planes = [plane(0), plane(1), plane(2)];
         let mut mask = 0u64;
         for g in 0..BUNDLE_LANES / W {
             if (active >> (W * g)) as u8 == 0 {
                 continue;
             }
-            let group = |v: &[f32; BUNDLE_LANES]| v.as_chunks::<W>().0[g];
-            let mut t0 = group(&self.t_min);
-            let mut t1 = group(t_max);
+            let mut t0 = self.t_min.as_chunks::<W>().0[g];
+            let mut t1 = t_max.as_chunks::<W>().0[g];
             for (a, &(near, far)) in planes.iter().enumerate() {
-                let (o, inv) = (group(&self.origin[a]), group(&self.inv_dir[a]));
+                let o = &self.origin[a].as_chunks::<W>().0[g];
+                let inv = &self.inv_dir[a].as_chunks::<W>().0[g];
                 for i in 0..W {
                     let tn = (near - o[i]) * inv[i];
                     let tf = (far - o[i]) * inv[i];
@@ -1001,6 +1004,47 @@ mod tests {
             entered_some > 500 && rejected_some > 500,
             "{entered_some} {rejected_some}"
         );
+    }
+
+    #[test]
+    fn lanes_entering_is_each_lanes_own_slab_test() {
+        // Bundles of nearby rays and boxes on and off their path, with each lane's own `t_max`;
+        // every lane's bit must be its `Aabb::intersect`. (`RT_ACCEL_PORTABLE=1` runs the
+        // portable mask instead of the vector one.)
+        let mut rng = Rng::new(11);
+        let (mut entered, mut missed) = (0, 0);
+        for round in 0..2000 {
+            let o = rng.in_box(Vec3::splat(-3.0), Vec3::splat(3.0));
+            let d = rng.unit_vector();
+            let spread = [1e-3, 0.1, 0.5][round % 3];
+            let rays: Vec<Ray> = (0..1 + round % BUNDLE_LANES)
+                .map(|_| {
+                    Ray::with_interval(
+                        o + rng.unit_vector() * spread,
+                        d + rng.unit_vector() * spread * 0.1,
+                        0.0,
+                        1.0 + rng.f32() * 8.0,
+                    )
+                })
+                .collect();
+            let c = o + d * rng.f32() * 6.0 + rng.unit_vector() * rng.f32();
+            let h = rng.in_box(Vec3::splat(0.05), Vec3::splat(1.0));
+            let bounds = Aabb::new(c - h, c + h);
+            for_each_bundle(&rays, |g| {
+                let Group::Bundle(b) = g else { return };
+                let mut t_max = [f32::NAN; BUNDLE_LANES];
+                for (i, t) in t_max[..b.len()].iter_mut().enumerate() {
+                    *t = b.t_max[i] * rng.f32();
+                }
+                let mask = b.lanes_entering(&bounds, &t_max, b.all_lanes());
+                for i in 0..b.len() {
+                    let own = bounds.intersect(&b.ray(i), t_max[i]).is_some();
+                    assert_eq!(mask >> i & 1 != 0, own, "round {round} lane {i}");
+                    if own { entered += 1 } else { missed += 1 }
+                }
+            });
+        }
+        assert!(entered > 1000 && missed > 1000, "{entered} {missed}");
     }
 
     #[test]

@@ -82,8 +82,10 @@
 //! one direction octant at a time ([`rt_core::bundle`]): the interval-culled packet traversal of
 //! Wald, Boulos & Shirley (2007) with per-lane masks (Overbeck et al. 2008). At a node one
 //! vector test bounds every lane against all eight children; the children left are tested lane
-//! by lane with each lane's own slab arithmetic, eight lanes per vector; leaves run the single
-//! ray's triangle test for each lane that reached them (`bundle.rs`). Every lane answers exactly
+//! by lane with each lane's own slab arithmetic, eight lanes per vector. A leaf of triangle
+//! packs tests each triangle against eight lanes at a time where the lanes that reached it fill
+//! their vectors (ray-parallel, as packet tracers do), else each lane alone with its single
+//! ray's four-triangle test (`bundle.rs`, `traverse.rs`). Every lane answers exactly
 //! as its single ray does, bit for bit (the conformance kit checks it in every order and bundle
 //! size). A bundle of one ray, a ray with a zero direction component, and a bundle whose
 //! directions spread wider than a camera tile's (rays in random directions, which would share
@@ -542,7 +544,7 @@ impl<P: Primitive> Bvh<P> {
     /// The bundle queries' core: each of the first `slots` rays answered through `answer(slot,
     /// answer)`, where an any-hit answer is `Some` when occluded. The wide tree traces coherent
     /// rays as bundles (`bundle.rs`) through rt-core's frame for bundle queries
-    /// ([`walk_groups_with`](rt_core::bundle::walk_groups_with)): a bundle that misses the
+    /// ([`walk_groups`](rt_core::bundle::walk_groups)): a bundle that misses the
     /// root's box is answered at once; one whose directions spread more than
     /// [`bundle::MAX_SPREAD`], a bundle of one ray and a ray that cannot travel in one take the
     /// single-ray path. The binary tree walks its own way ([`bundle::binary_bundle`]).

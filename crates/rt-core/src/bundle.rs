@@ -1037,8 +1037,8 @@ mod tests {
                     *t = b.t_max[i] * rng.f32();
                 }
                 let mask = b.lanes_entering(&bounds, &t_max, b.all_lanes());
-                for i in 0..b.len() {
-                    let own = bounds.intersect(&b.ray(i), t_max[i]).is_some();
+                for (i, &t) in t_max[..b.len()].iter().enumerate() {
+                    let own = bounds.intersect(&b.ray(i), t).is_some();
                     assert_eq!(mask >> i & 1 != 0, own, "round {round} lane {i}");
                     if own { entered += 1 } else { missed += 1 }
                 }

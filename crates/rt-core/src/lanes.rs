@@ -585,7 +585,10 @@ pub(crate) struct Step8<'a> {
     pub shear: [&'a [f32; W]; 3],
     pub t_min: &'a [f32; W],
     pub t_max: &'a [f32; W],
-    /// The lanes whose outputs the caller reads; a kernel may leave the others' unset.
+    /// The lanes whose outputs the caller reads; a kernel may leave the others' unset. Only
+    /// the AVX2 kernel uses it (to skip work no active lane needs); the portable one computes
+    /// every lane in one loop, so on targets without AVX2 nothing reads it.
+    #[cfg_attr(not(target_arch = "x86_64"), allow(dead_code))]
     pub active: u8,
 }
 

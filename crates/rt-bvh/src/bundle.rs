@@ -12,10 +12,11 @@
 //!   own slab arithmetic (the single ray's [`slab8`](crate::kernels::slab8), lane by lane), giving
 //!   the exact mask of lanes that enter it;
 //! - children are visited nearest first by their interval entry bound, pushed with their lane
-//!   masks; a leaf of watertight triangle packs tests each triangle against eight lanes at a
-//!   time (rt-core's [`Lanes`], ray-parallel as Embree's packet kernels are) where its lanes
-//!   fill enough vectors of eight, else each lane alone with its single ray's leaf test
-//!   (triangle-parallel, four triangles at a time), as `Leaves::test_lanes` decides.
+//!   masks; a leaf of watertight triangle packs tests each triangle against a vector of lanes
+//!   at a time (rt-core's [`Lanes`], eight or sixteen wide, ray-parallel as Embree's packet
+//!   kernels are) where its lanes fill enough vectors, else each lane alone with its single
+//!   ray's leaf test (triangle-parallel, four triangles at a time), as `Leaves::test_lanes`
+//!   decides.
 //!
 //! So every lane tests a superset of the primitives its single ray tests (the interval test is
 //! conservative, see [`rt_core::Bundle::may_enter`], and the lane tests are the single ray's),

@@ -83,9 +83,9 @@
 //! Wald, Boulos & Shirley (2007) with per-lane masks (Overbeck et al. 2008). At a node one
 //! vector test bounds every lane against all eight children; the children left are tested lane
 //! by lane with each lane's own slab arithmetic, eight lanes per vector. A leaf of triangle
-//! packs tests each triangle against eight lanes at a time where the lanes that reached it fill
-//! their vectors (ray-parallel, as packet tracers do), else each lane alone with its single
-//! ray's four-triangle test (`bundle.rs`, `traverse.rs`). Every lane answers exactly
+//! packs tests each triangle against a vector of lanes (eight, or sixteen with AVX-512) where
+//! the lanes that reached it fill their vectors (ray-parallel, as packet tracers do), else each
+//! lane alone with its single ray's four-triangle test (`bundle.rs`, `traverse.rs`). Every lane answers exactly
 //! as its single ray does, bit for bit (the conformance kit checks it in every order and bundle
 //! size). A bundle of one ray, a ray with a zero direction component, and a bundle whose
 //! directions spread wider than a camera tile's (rays in random directions, which would share

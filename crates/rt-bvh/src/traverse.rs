@@ -6,7 +6,7 @@ use crate::node::Node;
 use crate::node::{ChildRef, TriPack, WIDTH, WideNode};
 use crate::simd::Stack;
 use crate::{Items, MAX_DEPTH};
-use rt_core::bundle::{BUNDLE_LANES, Lanes};
+use rt_core::bundle::Lanes;
 use rt_core::glam::Vec3;
 use rt_core::trace::{self, Event, Place};
 use rt_core::{Hit, Primitive, Ray, SLAB_FAR_SCALE, Stats, Triangle, TriangleTest};
@@ -174,7 +174,7 @@ pub(crate) trait Leaves {
     /// single ray's [`Leaves::test`] would, keeping each lane's best hit in `lanes`; with
     /// `ANY`, returns the lanes blocked. This default tests lane by lane with
     /// [`Leaves::test`]; triangle packs for the watertight test override it to test one
-    /// triangle against eight lanes at a time.
+    /// triangle against a vector of lanes at a time.
     #[inline(always)]
     fn test_lanes<X: Simd, S: Stats, const ANY: bool>(
         &self,
@@ -270,8 +270,9 @@ impl<const MT: bool> Leaves for Packs<'_, MT> {
         false
     }
 
-    /// Watertight packs test each triangle against eight lanes at a time ([`Lanes`], rt-core's
-    /// eight-lane kernel) where the leaf's lanes fill the vectors they occupy well enough,
+    /// Watertight packs test each triangle against a vector of lanes at a time ([`Lanes`],
+    /// rt-core's eight- or sixteen-lane kernel) where the leaf's lanes fill the vectors they
+    /// occupy well enough,
     /// else each lane alone against four triangles at a time, as its single ray does. Both give
     /// each lane the bits of the scalar test. Möller–Trumbore packs test lane by lane.
     // PERF: bundles ÷ single rays, primary rays in 8×8 tiles, one thread, medians of 5
@@ -288,13 +289,11 @@ impl<const MT: bool> Leaves for Packs<'_, MT> {
         mask: u64,
         stats: &mut S,
     ) -> u64 {
-        // Eight lanes per kernel call pay where the lanes fill the vectors they occupy: a
-        // triangle costs one call per occupied vector of eight lanes, against one four-triangle
-        // call per pack for each lane alone.
+        // A vector of lanes per kernel call pays where the lanes fill the vectors they occupy:
+        // a triangle costs one call per occupied vector ([`Lanes::steps`]), against one
+        // four-triangle call per pack for each lane alone.
         let packs = &self.packs[items.clone()];
-        let vectors = (0..BUNDLE_LANES / 8)
-            .filter(|g| (mask >> (8 * g)) as u8 != 0)
-            .count();
+        let vectors = lanes.steps(mask);
         let triangles: usize = packs.iter().map(|p| p.len()).sum();
         if MT || triangles * vectors > packs.len() * mask.count_ones() as usize {
             return lane_by_lane::<Self, X, S, ANY>(self, simd, items, lanes, mask, stats);

@@ -14,7 +14,8 @@
 //! query, which answers invalid rays at once, as it always does.
 //!
 //! At the leaves, [`Lanes`] tests one primitive against many lanes, eight per vector step
-//! (AVX2 when the CPU has it), each lane with exactly its single-ray arithmetic.
+//! with AVX2 and sixteen with AVX-512 when the CPU has them, each lane with exactly its
+//! single-ray arithmetic.
 //!
 //! [`intersect_frame`] and [`occluded_frame`] trace a whole ray list in tiles on rayon's threads
 //! (with the `parallel` feature; in order on the calling thread without it).

@@ -1,13 +1,16 @@
 //! Run-time choice of vector instructions for the bundle kernels ([`Lanes`](crate::bundle::Lanes))
 //! and the bundle walks ([`Isa::run`]).
 //!
-//! The only `unsafe` of rt-core besides `pod_struct!`: the AVX2 kernel and the AVX2 frame the
-//! bundle walks run in, each called only when the CPU was found to have AVX2 and FMA. Each
-//! kernel here has a portable twin in plain arrays ([`watertight8_portable`]) that it matches
-//! bit for bit: the same IEEE operations in the same order, no fused multiply-add.
+//! The only `unsafe` of rt-core besides `pod_struct!`: the AVX2 and AVX-512 kernels and the
+//! frames the bundle walks run in, each called only when the CPU was found to have the
+//! features it is compiled with ([`Isa::available`]). Each kernel here has a portable twin in
+//! plain arrays ([`watertight8_portable`]) that it matches bit for bit: the same IEEE
+//! operations in the same order, no fused multiply-add.
 #![allow(unsafe_code)]
 
 use crate::lanes::{Out8, Step8, watertight8_portable};
+#[cfg(target_arch = "x86_64")]
+use crate::lanes::{Out16, Step16};
 
 /// The instruction set the kernels run with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -17,6 +20,10 @@ pub enum Isa {
     /// AVX2 and FMA (x86-64), found on this CPU at run time.
     #[cfg(target_arch = "x86_64")]
     Avx2,
+    /// AVX-512 (its foundation, with AVX2 and FMA) on x86-64, found on this CPU at run time:
+    /// the watertight kernel tests sixteen lanes per step.
+    #[cfg(target_arch = "x86_64")]
+    Avx512,
 }
 
 impl Isa {
@@ -33,18 +40,50 @@ impl Isa {
     /// The best this CPU has, whatever the environment says.
     pub(crate) fn detect_ignoring_env() -> Self {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma")
-        {
+        if Isa::Avx512.available() {
+            return Isa::Avx512;
+        }
+        #[cfg(target_arch = "x86_64")]
+        if Isa::Avx2.available() {
             return Isa::Avx2;
         }
         Isa::Portable
     }
 
+    /// Whether this CPU runs this instruction set.
+    pub fn available(self) -> bool {
+        match self {
+            Isa::Portable => true,
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx2 => {
+                std::arch::is_x86_feature_detected!("avx2")
+                    && std::arch::is_x86_feature_detected!("fma")
+            }
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 => Isa::Avx2.available() && std::arch::is_x86_feature_detected!("avx512f"),
+        }
+    }
+
+    /// Every instruction set this CPU runs, the portable one first (for tests that compare
+    /// them).
+    pub fn all_available() -> Vec<Isa> {
+        #[cfg_attr(not(target_arch = "x86_64"), allow(unused_mut))]
+        let mut isas = vec![Isa::Portable];
+        #[cfg(target_arch = "x86_64")]
+        isas.extend(
+            [Isa::Avx2, Isa::Avx512]
+                .into_iter()
+                .filter(|i| i.available()),
+        );
+        isas
+    }
+
     /// Runs `f` compiled for this instruction set where the CPU has it (else as the build's
-    /// target has it): with [`Isa::Avx2`], inside a function compiled with AVX2 and FMA enabled,
-    /// so that the code `f` inlines (a bundle walk's loops over eight lanes, the kernels) is
-    /// vectorised with them, eight lanes to a register and with mask moves, instead of the
-    /// baseline's four-lane SSE2.
+    /// target has it): with [`Isa::Avx2`] or [`Isa::Avx512`], inside a function compiled with
+    /// AVX2 and FMA enabled, so that the code `f` inlines (a bundle walk's loops over eight
+    /// lanes, the eight-lane kernel) is vectorised with them, eight lanes to a register and
+    /// with mask moves, instead of the baseline's four-lane SSE2. The sixteen-lane AVX-512
+    /// kernel is called from there, not inlined.
     ///
     /// The answers do not change: the same IEEE operations run in the same order, and Rust
     /// never fuses a multiply and an add on its own, so enabling FMA adds no fused operation.
@@ -54,13 +93,24 @@ impl Isa {
     // 2.09 2.06 -> 1.99 1.85 2.31 2.30, shadow 1.73 1.42 2.16 2.00 -> 2.02 1.55 2.46 2.33;
     // octree primary 3.77 3.57 5.05 4.98 -> 4.25 4.03 5.64 5.35; the hierarchical grid and
     // the binary BVH unchanged within ±3%.
+    // PERF: the frame compiled with AVX-512F as well (the sixteen-lane kernel inlined) made
+    // the bundle walks slower, not faster: the teapot's close view, primary rays in 8×8 tiles,
+    // one thread, three alternating runs, Mrays/s with the AVX2 frame and the eight-lane kernel
+    // -> the AVX-512 frame and the sixteen-lane kernel: wide BVH 31.4 31.0 30.4 -> 27.3 27.2
+    // 28.0, kd-tree 29.0 28.8 29.2 -> 27.4 26.5 27.3, octree 24.1 24.6 22.8 -> 23.3 22.4 23.3.
     #[inline(always)]
     pub fn run<R>(self, f: impl FnOnce() -> R) -> R {
         match self {
             #[cfg(target_arch = "x86_64")]
-            Isa::Avx2 if Self::detect_ignoring_env() == Isa::Avx2 => {
+            Isa::Avx2 if Isa::Avx2.available() => {
                 // SAFETY: this CPU has AVX2 and FMA (checked just above), which is all
                 // `x86::with_avx2` requires.
+                unsafe { x86::with_avx2(f) }
+            }
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512 if Isa::Avx512.available() => {
+                // SAFETY: this CPU has AVX-512F, AVX2 and FMA (checked just above); the frame
+                // requires AVX2 and FMA.
                 unsafe { x86::with_avx2(f) }
             }
             _ => f(),
@@ -80,15 +130,39 @@ fn portable_forced() -> bool {
 pub(crate) fn watertight8(isa: Isa, verts: &[f32; 9], input: &Step8) -> Out8 {
     match isa {
         #[cfg(target_arch = "x86_64")]
-        // SAFETY: `Isa::Avx2` is made only by `Isa::detect` after it found AVX2 on this CPU.
-        Isa::Avx2 => unsafe { x86::watertight8(verts, input) },
+        // SAFETY: `Lanes` holds `Isa::Avx2` or `Isa::Avx512` only when `Isa::available` found
+        // this CPU runs it, and both include AVX2.
+        Isa::Avx2 | Isa::Avx512 => unsafe { x86::watertight8(verts, input) },
         Isa::Portable => watertight8_portable(verts, input),
+    }
+}
+
+/// The watertight test of sixteen lanes (two steps of eight that lie one after the other) with
+/// instruction set `isa`: one AVX-512 step, or two of eight.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(crate) fn watertight16(isa: Isa, verts: &[f32; 9], input: &Step16) -> Out16 {
+    match isa {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: `Lanes` holds `Isa::Avx512` only when `Isa::available` found this CPU runs it.
+        Isa::Avx512 => unsafe { x86::watertight16(verts, input) },
+        _ => {
+            let half = |h: &Step8| {
+                if h.active == 0 {
+                    Out8::default()
+                } else {
+                    watertight8(isa, verts, h)
+                }
+            };
+            let (lo, hi) = input.halves();
+            Out16::join(&half(&lo), &half(&hi))
+        }
     }
 }
 
 #[cfg(target_arch = "x86_64")]
 mod x86 {
-    use super::{Out8, Step8};
+    use super::{Out8, Out16, Step8, Step16};
     use std::arch::x86_64::*;
 
     /// Calls `f` in a function compiled with AVX2 and FMA, where `f` and what it inlines are
@@ -177,6 +251,76 @@ mod x86 {
             _mm256_storeu_ps(out.t.as_mut_ptr(), t);
             _mm256_storeu_ps(out.u.as_mut_ptr(), _mm256_mul_ps(v, inv));
             _mm256_storeu_ps(out.v.as_mut_ptr(), _mm256_mul_ps(w, inv));
+            out
+        }
+    }
+
+    /// [`watertight8_portable`](crate::lanes::watertight8_portable) in AVX-512 over sixteen
+    /// lanes: the same operations, in the same order, as the AVX2 kernel.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub(super) fn watertight16(verts: &[f32; 9], input: &Step16) -> Out16 {
+        // SAFETY: every load reads sixteen `f32` of an array of sixteen, and every store writes
+        // sixteen into one; unaligned loads and stores need no alignment.
+        unsafe {
+            let load = |a: &[f32; 16]| _mm512_loadu_ps(a.as_ptr());
+            let [ox, oy, oz] = input.origin.map(load);
+            let [sx, sy, sz] = input.shear.map(load);
+            let rel = |k: usize| {
+                (
+                    _mm512_sub_ps(_mm512_set1_ps(verts[k]), ox),
+                    _mm512_sub_ps(_mm512_set1_ps(verts[k + 1]), oy),
+                    _mm512_sub_ps(_mm512_set1_ps(verts[k + 2]), oz),
+                )
+            };
+            let (ax, ay, az) = rel(0);
+            let (bx, by, bz) = rel(3);
+            let (cx, cy, cz) = rel(6);
+            let shear = |x: __m512, s: __m512, z: __m512| _mm512_sub_ps(x, _mm512_mul_ps(s, z));
+            let (ax, ay) = (shear(ax, sx, az), shear(ay, sy, az));
+            let (bx, by) = (shear(bx, sx, bz), shear(by, sy, bz));
+            let (cx, cy) = (shear(cx, sx, cz), shear(cy, sy, cz));
+            let cross = |p: __m512, q: __m512, r: __m512, s: __m512| {
+                _mm512_sub_ps(_mm512_mul_ps(p, q), _mm512_mul_ps(r, s))
+            };
+            let u = cross(cx, by, cy, bx);
+            let v = cross(ax, cy, ay, cx);
+            let w = cross(bx, ay, by, ax);
+            let zero = _mm512_setzero_ps();
+            let eq0 = |x| _mm512_cmp_ps_mask::<_CMP_EQ_OQ>(x, zero);
+            let lt0 = |x| _mm512_cmp_ps_mask::<_CMP_LT_OQ>(x, zero);
+            let gt0 = |x| _mm512_cmp_ps_mask::<_CMP_GT_OQ>(x, zero);
+            let zero_bits = eq0(u) | eq0(v) | eq0(w);
+            let outside = (lt0(u) | lt0(v) | lt0(w)) & (gt0(u) | gt0(v) | gt0(w));
+            // As in the AVX2 kernel: when every active lane passes outside an edge, no lane
+            // the caller reads is inside, and the division is skipped.
+            if (!outside | zero_bits) & input.active == 0 {
+                return Out16::default();
+            }
+            let det = _mm512_add_ps(_mm512_add_ps(u, v), w);
+            // Ordered not-equal: false for NaN, as `det != 0.0 && !det.is_nan()`.
+            let det_ok = _mm512_cmp_ps_mask::<_CMP_NEQ_OQ>(det, zero);
+            let (az, bz, cz) = (
+                _mm512_mul_ps(sz, az),
+                _mm512_mul_ps(sz, bz),
+                _mm512_mul_ps(sz, cz),
+            );
+            let inv = _mm512_div_ps(_mm512_set1_ps(1.0), det);
+            let sum = _mm512_add_ps(
+                _mm512_add_ps(_mm512_mul_ps(u, az), _mm512_mul_ps(v, bz)),
+                _mm512_mul_ps(w, cz),
+            );
+            let t = _mm512_mul_ps(sum, inv);
+            let in_range = _mm512_cmp_ps_mask::<_CMP_GE_OQ>(t, load(input.t_min))
+                & _mm512_cmp_ps_mask::<_CMP_LE_OQ>(t, load(input.t_max));
+            let mut out = Out16 {
+                inside: !outside & det_ok & in_range,
+                zero: zero_bits,
+                ..Out16::default()
+            };
+            _mm512_storeu_ps(out.t.as_mut_ptr(), t);
+            _mm512_storeu_ps(out.u.as_mut_ptr(), _mm512_mul_ps(v, inv));
+            _mm512_storeu_ps(out.v.as_mut_ptr(), _mm512_mul_ps(w, inv));
             out
         }
     }

@@ -617,13 +617,18 @@ trait LeafWalk {
 }
 
 /// One ray through [`traverse::wide`].
-struct OneRay<'a, S, const ANY: bool, const SORT: bool>(&'a Ray, &'a mut S);
+/// `sort`: whether a closest-hit ray sorts the children it enters ([`Ablation::sort_children`]).
+struct OneRay<'a, S, const ANY: bool> {
+    ray: &'a Ray,
+    sort: bool,
+    stats: &'a mut S,
+}
 
-impl<S: Stats, const ANY: bool, const SORT: bool> LeafWalk for OneRay<'_, S, ANY, SORT> {
+impl<S: Stats, const ANY: bool> LeafWalk for OneRay<'_, S, ANY> {
     type Out = Option<Hit>;
     #[inline(always)]
     fn walk<L: traverse::Leaves>(self, nodes: &[WideNode], isa: Isa, leaves: &L) -> Option<Hit> {
-        simd::dispatch::<_, S, ANY, SORT>(isa, nodes, leaves, self.0, self.1)
+        simd::dispatch::<_, S, ANY>(isa, nodes, leaves, self.ray, self.sort, self.stats)
     }
 }
 
@@ -680,11 +685,11 @@ impl<P: Primitive> Wide<P> {
     /// The wide traversal with this tree's leaves, kernels and child ordering.
     #[inline(always)]
     fn walk<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        if self.ablation.sort_children {
-            self.with_leaves(OneRay::<S, ANY, true>(ray, stats))
-        } else {
-            self.with_leaves(OneRay::<S, ANY, false>(ray, stats))
-        }
+        self.with_leaves(OneRay::<S, ANY> {
+            ray,
+            sort: self.ablation.sort_children,
+            stats,
+        })
     }
 }
 

@@ -56,35 +56,37 @@ impl Isa {
 
 /// Runs the wide traversal with the instruction set `isa`.
 #[inline(always)]
-pub(crate) fn dispatch<L: Leaves, S: Stats, const ANY: bool, const SORT: bool>(
+pub(crate) fn dispatch<L: Leaves, S: Stats, const ANY: bool>(
     isa: Isa,
     nodes: &[WideNode],
     leaves: &L,
     ray: &Ray,
+    sort: bool,
     stats: &mut S,
 ) -> Option<Hit> {
     match isa {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: an `Avx2` value exists only if `Avx2::detect` found AVX2 and FMA on this CPU,
         // which is all `wide_avx2` requires.
-        Isa::Avx2(simd) => unsafe { wide_avx2::<L, S, ANY, SORT>(simd, nodes, leaves, ray, stats) },
+        Isa::Avx2(simd) => unsafe { wide_avx2::<L, S, ANY>(simd, nodes, leaves, ray, sort, stats) },
         #[cfg(target_arch = "x86_64")]
-        Isa::Sse2 => wide::<Sse2, L, S, ANY, SORT>(Sse2, nodes, leaves, ray, stats),
-        Isa::Portable => wide::<Portable, L, S, ANY, SORT>(Portable, nodes, leaves, ray, stats),
+        Isa::Sse2 => wide::<Sse2, L, S, ANY>(Sse2, nodes, leaves, ray, sort, stats),
+        Isa::Portable => wide::<Portable, L, S, ANY>(Portable, nodes, leaves, ray, sort, stats),
     }
 }
 
 /// The wide traversal, compiled with AVX2 and FMA enabled so the intrinsics inline.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn wide_avx2<L: Leaves, S: Stats, const ANY: bool, const SORT: bool>(
+fn wide_avx2<L: Leaves, S: Stats, const ANY: bool>(
     simd: Avx2,
     nodes: &[WideNode],
     leaves: &L,
     ray: &Ray,
+    sort: bool,
     stats: &mut S,
 ) -> Option<Hit> {
-    wide::<Avx2, L, S, ANY, SORT>(simd, nodes, leaves, ray, stats)
+    wide::<Avx2, L, S, ANY>(simd, nodes, leaves, ray, sort, stats)
 }
 
 /// Runs the bundle traversal with the instruction set `isa`.

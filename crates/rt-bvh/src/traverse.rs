@@ -430,8 +430,10 @@ fn consider(best: &mut Hit, id: u32, t: f32, u: f32, v: f32) {
 }
 
 /// The wide traversal core, shared by closest hit (`ANY = false`) and any hit (`ANY = true`).
-/// `SORT = false` skips sorting the children a closest-hit ray enters (a switch to measure what
-/// the sorting gains; see [`Ablation::sort_children`](crate::Ablation::sort_children)).
+/// `sort = false` skips sorting the children a closest-hit ray enters (a switch to measure what
+/// the sorting gains; see [`Ablation::sort_children`](crate::Ablation::sort_children)). It is a
+/// value rather than a type parameter because a second copy of every walk doubled what the
+/// crate costs to compile, for a branch taken the same way on every node of a run.
 ///
 /// Each visit tests all children of a node with one slab test. Closest hit: the children
 /// entered are sorted by entry distance; the nearest is visited next and the others pushed with
@@ -440,11 +442,12 @@ fn consider(best: &mut Hit, id: u32, t: f32, u: f32, v: f32) {
 /// sorting (measured slower: it found hits no sooner); the children are pushed in lane order, and
 /// the first hit ends the walk. Leaves are tested when popped, like nodes.
 #[inline(always)]
-pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool, const SORT: bool>(
+pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
     simd: X,
     nodes: &[WideNode],
     leaves: &L,
     ray: &Ray,
+    sort: bool,
     stats: &mut S,
 ) -> Option<Hit> {
     // PERF: the root is tested before the triangle tests' part of the ray is set up, which a
@@ -516,7 +519,7 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool, const SORT: bo
                     let i = mask.trailing_zeros() as usize;
                     (current, t_current) = (node.child(i), t_children[i]);
                     continue;
-                } else if !SORT {
+                } else if !sort {
                     // Unsorted (only to measure what sorting gains): the first child entered
                     // next, the others pushed in lane order with their entry distances.
                     let t_entry = simd.store8(t_entry);

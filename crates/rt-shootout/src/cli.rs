@@ -75,7 +75,7 @@ pub fn exit_on_error(error: clap::Error) -> ! {
 
 /// clap's message on one line: without its `error: ` prefix, its usage line and its hint to try
 /// `--help`.
-fn one_line(message: &str) -> String {
+pub fn one_line(message: &str) -> String {
     let parts: Vec<&str> = message
         .lines()
         .map(str::trim)
@@ -83,27 +83,4 @@ fn one_line(message: &str) -> String {
         .collect();
     let joined = parts.join(" ");
     joined.strip_prefix("error: ").unwrap_or(&joined).to_owned()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn counts_take_suffixes() {
-        assert_eq!(count("20000"), Ok(20_000));
-        assert_eq!(count("0"), Ok(0));
-        assert_eq!(count("20k"), Ok(20_000));
-        assert_eq!(count("1.5M"), Ok(1_500_000));
-        assert!(count("lots").unwrap_err().contains("`lots` is not a count"));
-    }
-
-    #[test]
-    fn clap_messages_become_one_line() {
-        let message = "error: invalid value 'pink' for '--fill <FILL>'\n  [possible values: depth, prims]\n\nFor more information, try '--help'.\n";
-        assert_eq!(
-            one_line(message),
-            "invalid value 'pink' for '--fill <FILL>' [possible values: depth, prims]"
-        );
-    }
 }

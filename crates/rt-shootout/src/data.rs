@@ -32,10 +32,19 @@ pub struct Row {
     /// The SAH's expected visits and tests per traced ray (see [`predicted_per_ray`]), for
     /// structures that describe their regions.
     pub predicted: Option<PredictedCost>,
-    /// Every ray's answer (kept only when the report prints them, with `--rays-file`).
+    /// Every ray's answer, in ray order (see [`Row::answers`]; the JSON report lists them with
+    /// `--rays-file`).
     pub(crate) answers: Vec<Option<Hit>>,
     /// The same rays traced as bundles (`compare --bundle`).
     pub bundle: Option<BundleRow>,
+}
+
+impl Row {
+    /// Every ray's answer, in the order of the report's rays; an any-hit answer is `Some` when
+    /// the ray is occluded.
+    pub fn answers(&self) -> &[Option<Hit>] {
+        &self.answers
+    }
 }
 
 /// A row's rays traced as bundles ([`rt_core::Accel::intersect_bundle`]), beside its single rays.

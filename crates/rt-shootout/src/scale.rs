@@ -364,20 +364,3 @@ impl ScaleReport {
         crate::report::scale_chart(path, self)
     }
 }
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_ladder_goes_up_by_one_and_three_times_powers_of_ten() {
-        assert_eq!(
-            ladder(10_000, 10_000_000),
-            [
-                10_000, 30_000, 100_000, 300_000, 1_000_000, 3_000_000, 10_000_000
-            ]
-        );
-        assert_eq!(ladder(5_000, 50_000), [10_000, 30_000, 50_000]);
-        assert_eq!(ladder(7, 7), [7]);
-    }
-}

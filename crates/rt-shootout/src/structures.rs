@@ -303,16 +303,6 @@ where
         .collect()
 }
 
-/// The default preset of one structure type.
-#[cfg(test)]
-pub fn entry_of<A, S>() -> Entry
-where
-    A: Accel<Prim = Triangle> + 'static,
-    S: Accel<Prim = Shape, Params = A::Params> + 'static,
-{
-    entries_of::<A, S>().remove(0)
-}
-
 /// Every built-in structure and preset, in report order.
 pub fn all() -> Vec<Entry> {
     let mut all = entries_of_refittable::<Bvh<Triangle>, Bvh<Shape>>();

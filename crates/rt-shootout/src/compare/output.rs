@@ -6,7 +6,9 @@ use crate::data::{BundleRow, Report, Row, three_digits};
 use rt_core::Hit;
 use std::fmt::Write as _;
 
-pub(super) fn to_table(r: &Report) -> String {
+/// The report as the table `compare` prints: a header naming the scene, rays and view, a row per
+/// structure, and the bundle and disagreement tables where there are any.
+pub fn to_table(r: &Report) -> String {
     let mut s = String::new();
     let (unit, units) = if r.ray_kind == points::KIND {
         ("query", "closest-point queries")

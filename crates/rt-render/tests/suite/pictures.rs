@@ -2,7 +2,11 @@
 //! picture shows what the scene holds (a mirror reflects the floor, shadows are darker).
 
 use rt_bvh::{Bvh, BvhParams};
-use rt_core::{Accel, DynAccel, Primitive, Ray, Shape};
+use rt_core::glam::Vec3;
+use rt_core::{
+    Aabb, Accel, BallQuery, BuildStats, Counters, DynAccel, Hit, PointHit, Primitive, Ray, Region,
+    Shape, Trace,
+};
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
 use rt_kdtree::KdTree;
@@ -58,6 +62,79 @@ fn every_structure_renders_the_same_bytes() {
             differ, 0,
             "{name} renders {differ} pixels differently from bvh"
         );
+    }
+}
+
+/// A structure seen without its bundle traversals: every query goes to it, but its bundle queries
+/// are `DynAccel`'s defaults, which trace each ray alone.
+struct Singles<'a>(&'a dyn DynAccel<Shape>);
+
+impl DynAccel<Shape> for Singles<'_> {
+    fn name(&self) -> &'static str {
+        self.0.name()
+    }
+    fn bounds_dyn(&self) -> Aabb {
+        self.0.bounds_dyn()
+    }
+    fn memory_bytes_dyn(&self) -> usize {
+        self.0.memory_bytes_dyn()
+    }
+    fn build_stats_dyn(&self) -> BuildStats {
+        self.0.build_stats_dyn()
+    }
+    fn regions_dyn(&self) -> Vec<Region> {
+        self.0.regions_dyn()
+    }
+    fn intersect_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> Option<Hit> {
+        self.0.intersect_dyn(ray, counters)
+    }
+    fn occluded_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> bool {
+        self.0.occluded_dyn(ray, counters)
+    }
+    fn ball_query_dyn(&self, query: &mut dyn BallQuery<Shape>, counters: Option<&mut Counters>) {
+        self.0.ball_query_dyn(query, counters);
+    }
+    fn trace_dyn(&self, ray: &Ray, any: bool) -> (Option<Hit>, Trace) {
+        self.0.trace_dyn(ray, any)
+    }
+    fn intersect_all(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        counters: Option<&mut Counters>,
+    ) {
+        self.0.intersect_all(rays, out, counters);
+    }
+    fn occluded_all(&self, rays: &[Ray], out: &mut [bool], counters: Option<&mut Counters>) {
+        self.0.occluded_all(rays, out, counters);
+    }
+    fn closest_points_all(
+        &self,
+        points: &[(Vec3, f32)],
+        out: &mut [Option<PointHit>],
+        counters: Option<&mut Counters>,
+    ) {
+        self.0.closest_points_all(points, out, counters);
+    }
+}
+
+/// The picture [`render`] makes by tracing bundles, against the one the same structure makes
+/// with single rays: the same bytes, for every structure (a wrong pairing of rays and answers,
+/// or a lane answered differently, changes pixels).
+#[test]
+fn bundles_render_the_single_rays_bytes() {
+    let scene = RenderScene::whitted();
+    let shapes = scene.shapes();
+    for (name, tracer) in structures(&shapes) {
+        let bundled = picture(&scene, tracer.as_ref());
+        let single = picture(&scene, &Singles(tracer.as_ref()));
+        let differ = single
+            .pixels
+            .iter()
+            .zip(&bundled.pixels)
+            .filter(|(a, b)| a != b)
+            .count();
+        assert_eq!(differ, 0, "{name}: {differ} pixels differ from single rays");
     }
 }
 

@@ -182,7 +182,7 @@ fn the_random_scenes_report_is_short() {
 fn the_test_macro_lists_every_scene_of_the_kit() {
     // `conformance_tests!` spells the scene names out (a macro cannot loop over a const slice):
     // if the kit grows a scene, the macro's list must grow too.
-    let source = include_str!("../src/lib.rs");
+    let source = include_str!("../../src/lib.rs");
     let start = source
         .find("conformance_tests!(@each $check, $accel;")
         .expect("the macro's scene list");

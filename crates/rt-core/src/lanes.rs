@@ -506,7 +506,10 @@ impl Lanes {
             t_max: at(&self.t, pair),
             active: m,
         };
-        let out = crate::simd::watertight16(self.isa, &Self::vertices(tri, k), &input);
+        // Only `watertight` calls this, and only when `self.isa` is `Isa::Avx512`.
+        let Some(out) = crate::simd::watertight16(self.isa, &Self::vertices(tri, k), &input) else {
+            return 0;
+        };
         let (inside, zero) = (u32::from(out.inside), u32::from(out.zero));
         let o = (&out.t[..], &out.u[..], &out.v[..]);
         self.settle::<ANY>(tri, id, pair * 2 * W, u32::from(m), inside, zero, o) as u16
@@ -717,27 +720,6 @@ pub(crate) struct Step16<'a> {
     pub active: u16,
 }
 
-#[cfg(target_arch = "x86_64")]
-impl Step16<'_> {
-    /// The first eight lanes and the last eight.
-    #[inline(always)]
-    pub(crate) fn halves(&self) -> (Step8<'_>, Step8<'_>) {
-        fn half(a: &[f32; 16], h: usize) -> &[f32; W] {
-            &a.as_chunks::<W>().0[h]
-        }
-        let [o0, o1, o2] = self.origin;
-        let [s0, s1, s2] = self.shear;
-        let step = |h: usize| Step8 {
-            origin: [half(o0, h), half(o1, h), half(o2, h)],
-            shear: [half(s0, h), half(s1, h), half(s2, h)],
-            t_min: half(self.t_min, h),
-            t_max: half(self.t_max, h),
-            active: (self.active >> (W * h)) as u8,
-        };
-        (step(0), step(1))
-    }
-}
-
 /// Sixteen lanes' watertight test, as [`Out8`].
 #[cfg(target_arch = "x86_64")]
 #[derive(Clone, Copy, Debug, Default)]
@@ -747,28 +729,6 @@ pub(crate) struct Out16 {
     pub v: [f32; 16],
     pub inside: u16,
     pub zero: u16,
-}
-
-#[cfg(target_arch = "x86_64")]
-impl Out16 {
-    /// Two eight-lane answers as one of sixteen lanes.
-    #[inline(always)]
-    pub(crate) fn join(lo: &Out8, hi: &Out8) -> Self {
-        let mut out = Self {
-            inside: u16::from(lo.inside) | u16::from(hi.inside) << W,
-            zero: u16::from(lo.zero) | u16::from(hi.zero) << W,
-            ..Self::default()
-        };
-        for (o, (l, h)) in [
-            (&mut out.t, (&lo.t, &hi.t)),
-            (&mut out.u, (&lo.u, &hi.u)),
-            (&mut out.v, (&lo.v, &hi.v)),
-        ] {
-            o[..W].copy_from_slice(l);
-            o[W..].copy_from_slice(h);
-        }
-        out
-    }
 }
 
 /// Eight lanes' watertight test: `t`, `u`, `v` of each, the lanes whose hit lies in their

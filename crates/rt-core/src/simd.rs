@@ -137,26 +137,15 @@ pub(crate) fn watertight8(isa: Isa, verts: &[f32; 9], input: &Step8) -> Out8 {
     }
 }
 
-/// The watertight test of sixteen lanes (two steps of eight that lie one after the other) with
-/// instruction set `isa`: one AVX-512 step, or two of eight.
+/// The watertight test of sixteen lanes in one AVX-512 step; `None` for any other `isa`
+/// (`Lanes` calls it only with `Isa::Avx512`, and tests eight lanes at a time otherwise).
 #[cfg(target_arch = "x86_64")]
 #[inline(always)]
-pub(crate) fn watertight16(isa: Isa, verts: &[f32; 9], input: &Step16) -> Out16 {
+pub(crate) fn watertight16(isa: Isa, verts: &[f32; 9], input: &Step16) -> Option<Out16> {
     match isa {
-        #[cfg(target_arch = "x86_64")]
         // SAFETY: `Lanes` holds `Isa::Avx512` only when `Isa::available` found this CPU runs it.
-        Isa::Avx512 => unsafe { x86::watertight16(verts, input) },
-        _ => {
-            let half = |h: &Step8| {
-                if h.active == 0 {
-                    Out8::default()
-                } else {
-                    watertight8(isa, verts, h)
-                }
-            };
-            let (lo, hi) = input.halves();
-            Out16::join(&half(&lo), &half(&hi))
-        }
+        Isa::Avx512 => Some(unsafe { x86::watertight16(verts, input) }),
+        _ => None,
     }
 }
 

@@ -24,7 +24,10 @@ use glam::Vec3;
 /// ```
 ///
 /// [`Aabb::intersect`]: crate::Aabb::intersect
+// `repr(C)`: eleven `f32` in this order, which the bundles' AVX2 transpose reads as rows
+// (`simd::ray_columns8`); the assertions below keep the layout it relies on.
 #[derive(Clone, Copy, Debug, PartialEq)]
+#[repr(C)]
 pub struct Ray {
     /// Where the ray starts (at `t = 0`).
     pub origin: Vec3,
@@ -35,6 +38,12 @@ pub struct Ray {
     /// Hits with `t > t_max` are ignored.
     pub t_max: f32,
 }
+
+const _: () = {
+    assert!(std::mem::size_of::<Ray>() == 11 * 4 && std::mem::align_of::<Ray>() == 4);
+    assert!(std::mem::offset_of!(Ray, dir) == 12 && std::mem::offset_of!(Ray, inv_dir) == 24);
+    assert!(std::mem::offset_of!(Ray, t_min) == 36 && std::mem::offset_of!(Ray, t_max) == 40);
+};
 
 impl Ray {
     /// A ray over `[0, +inf]`.

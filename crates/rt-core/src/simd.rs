@@ -8,6 +8,7 @@
 //! operations in the same order, no fused multiply-add.
 #![allow(unsafe_code)]
 
+use crate::Ray;
 use crate::lanes::{Out8, Step8, watertight8_portable};
 #[cfg(target_arch = "x86_64")]
 use crate::lanes::{Out16, Step16};
@@ -149,9 +150,44 @@ pub(crate) fn watertight16(isa: Isa, verts: &[f32; 9], input: &Step16) -> Option
     }
 }
 
+/// Eight rays as the eleven vectors of their lanes: origin x, y, z, direction x, y, z,
+/// reciprocal direction x, y, z, `t_min`, `t_max` (the order of [`Ray`]'s fields).
+pub(crate) type RayColumns = [[f32; 8]; 11];
+
+/// Eight rays transposed into [`RayColumns`] with instruction set `isa`: the same values
+/// either way, only moved.
+#[inline(always)]
+pub(crate) fn ray_columns8(isa: Isa, rays: &[Ray; 8]) -> RayColumns {
+    match isa {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: callers hold `Isa::Avx2` or `Isa::Avx512` only when `Isa::available` found
+        // this CPU runs it (`Isa::detect`), and both include AVX2.
+        Isa::Avx2 | Isa::Avx512 => unsafe { x86::ray_columns8(rays) },
+        Isa::Portable => ray_columns8_portable(rays),
+    }
+}
+
+/// [`ray_columns8`] field by field.
+#[inline(always)]
+pub(crate) fn ray_columns8_portable(rays: &[Ray; 8]) -> RayColumns {
+    let mut c = [[0.0; 8]; 11];
+    for (i, r) in rays.iter().enumerate() {
+        let (o, d, inv) = (r.origin, r.dir(), r.inv_dir());
+        for a in 0..3 {
+            c[a][i] = o[a];
+            c[3 + a][i] = d[a];
+            c[6 + a][i] = inv[a];
+        }
+        c[9][i] = r.t_min;
+        c[10][i] = r.t_max;
+    }
+    c
+}
+
 #[cfg(target_arch = "x86_64")]
 mod x86 {
-    use super::{Out8, Out16, Step8, Step16};
+    use super::{Out8, Out16, RayColumns, Step8, Step16};
+    use crate::Ray;
     use std::arch::x86_64::*;
 
     /// Calls `f` in a function compiled with AVX2 and FMA, where `f` and what it inlines are
@@ -160,6 +196,64 @@ mod x86 {
     #[inline]
     pub(super) fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
         f()
+    }
+
+    /// [`ray_columns8_portable`](super::ray_columns8_portable) as an 8×8 transpose of the
+    /// rays' first eight fields and a 4×8 one of their last four.
+    // PERF: written field by field, filling a bundle with the rays of a camera's 8×8 tile was
+    // the largest part of the time around a bundle walk; see `Bundle::fill`.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(super) fn ray_columns8(rays: &[Ray; 8]) -> RayColumns {
+        let mut c = [[0.0f32; 8]; 11];
+        // SAFETY: `Ray` is `repr(C)`, eleven `f32` with no padding (asserted beside it), so
+        // each ray's fields 0..8 and 7..11 are 32 and 16 bytes inside it; unaligned loads and
+        // stores need no alignment, and every store writes eight `f32` into one array of eight.
+        unsafe {
+            let row = |i: usize| (&raw const rays[i]).cast::<f32>();
+            let r: [__m256; 8] = std::array::from_fn(|i| _mm256_loadu_ps(row(i)));
+            // Pairs of rays interleaved, then fours, then the halves of eight joined.
+            let lo = |a, b| _mm256_unpacklo_ps(a, b);
+            let hi = |a, b| _mm256_unpackhi_ps(a, b);
+            let (t0, t1, t2, t3) = (
+                lo(r[0], r[1]),
+                hi(r[0], r[1]),
+                lo(r[2], r[3]),
+                hi(r[2], r[3]),
+            );
+            let (t4, t5, t6, t7) = (
+                lo(r[4], r[5]),
+                hi(r[4], r[5]),
+                lo(r[6], r[7]),
+                hi(r[6], r[7]),
+            );
+            let even = |a, b| _mm256_shuffle_ps::<0x44>(a, b);
+            let odd = |a, b| _mm256_shuffle_ps::<0xEE>(a, b);
+            let s = [even(t0, t2), odd(t0, t2), even(t1, t3), odd(t1, t3)];
+            let u = [even(t4, t6), odd(t4, t6), even(t5, t7), odd(t5, t7)];
+            for k in 0..4 {
+                _mm256_storeu_ps(
+                    c[k].as_mut_ptr(),
+                    _mm256_permute2f128_ps::<0x20>(s[k], u[k]),
+                );
+                _mm256_storeu_ps(
+                    c[k + 4].as_mut_ptr(),
+                    _mm256_permute2f128_ps::<0x31>(s[k], u[k]),
+                );
+            }
+            // Fields 7..11 of ray `i` in the low half and of ray `i + 4` in the high half.
+            let tail = |i: usize| {
+                let q = |i: usize| _mm_loadu_ps(row(i).add(7));
+                _mm256_set_m128(q(i + 4), q(i))
+            };
+            let (q0, q1, q2, q3) = (tail(0), tail(1), tail(2), tail(3));
+            let (a, b) = (lo(q0, q1), hi(q0, q1));
+            let (d, e) = (lo(q2, q3), hi(q2, q3));
+            _mm256_storeu_ps(c[8].as_mut_ptr(), odd(a, d));
+            _mm256_storeu_ps(c[9].as_mut_ptr(), even(b, e));
+            _mm256_storeu_ps(c[10].as_mut_ptr(), odd(b, e));
+        }
+        c
     }
 
     /// [`watertight8_portable`](crate::lanes::watertight8_portable) in AVX2: the same

@@ -82,7 +82,9 @@
 //! one direction octant at a time ([`rt_core::bundle`]): the interval-culled packet traversal of
 //! Wald, Boulos & Shirley (2007) with per-lane masks (Overbeck et al. 2008). At a node one
 //! vector test bounds every lane against all eight children; the children left are tested lane
-//! by lane with each lane's own slab arithmetic, eight lanes per vector. A leaf of triangle
+//! by lane with each lane's own slab arithmetic, eight lanes per vector (when the lanes share
+//! one origin, as a camera's do, only the leaves are: an inner child then takes every active
+//! lane, as Embree's coherent packets do, since the bound is nearly as tight). A leaf of triangle
 //! packs tests each triangle against a vector of lanes (eight, or sixteen with AVX-512) where
 //! the lanes that reached it fill their vectors (ray-parallel, as packet tracers do), else each
 //! lane alone with its single ray's four-triangle test (`bundle.rs`, `traverse.rs`). Every lane answers exactly

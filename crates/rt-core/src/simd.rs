@@ -150,6 +150,28 @@ pub(crate) fn watertight16(isa: Isa, verts: &[f32; 9], input: &Step16) -> Option
     }
 }
 
+/// Sixteen lanes' best hits so far, as [`Lanes`](crate::bundle::Lanes) keeps them.
+#[cfg(target_arch = "x86_64")]
+pub(crate) struct Best16<'a> {
+    pub t: &'a mut [f32; 16],
+    pub prim: &'a mut [u32; 16],
+    pub u: &'a mut [f32; 16],
+    pub v: &'a mut [f32; 16],
+}
+
+/// Keeps the hits of `out` on primitive `id` in the lanes of `lanes` where they beat the
+/// lane's best by the tie rule ([`Hit::beats`](crate::Hit::beats)), all sixteen at once;
+/// returns the lanes whose best they became. `None` for any other `isa` than AVX-512.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+pub(crate) fn keep16(isa: Isa, out: &Out16, id: u32, lanes: u16, best: Best16<'_>) -> Option<u16> {
+    match isa {
+        // SAFETY: `Lanes` holds `Isa::Avx512` only when `Isa::available` found this CPU runs it.
+        Isa::Avx512 => Some(unsafe { x86::keep16(out, id, lanes, best) }),
+        _ => None,
+    }
+}
+
 /// Eight rays as the eleven vectors of their lanes: origin x, y, z, direction x, y, z,
 /// reciprocal direction x, y, z, `t_min`, `t_max` (the order of [`Ray`]'s fields).
 pub(crate) type RayColumns = [[f32; 8]; 11];
@@ -199,7 +221,7 @@ pub(crate) fn in_avx512<R>(isa: Isa, f: impl FnOnce() -> R) -> R {
 
 #[cfg(target_arch = "x86_64")]
 mod x86 {
-    use super::{Out8, Out16, RayColumns, Step8, Step16};
+    use super::{Best16, Out8, Out16, RayColumns, Step8, Step16};
     use crate::Ray;
     use std::arch::x86_64::*;
 
@@ -425,6 +447,31 @@ mod x86 {
             _mm512_storeu_ps(out.u.as_mut_ptr(), _mm512_mul_ps(v, inv));
             _mm512_storeu_ps(out.v.as_mut_ptr(), _mm512_mul_ps(w, inv));
             out
+        }
+    }
+
+    /// [`keep16`](super::keep16): `Hit::beats` as two comparisons and a masked store of each
+    /// of the four outputs.
+    #[target_feature(enable = "avx512f")]
+    #[inline]
+    pub(super) fn keep16(out: &Out16, id: u32, lanes: u16, best: Best16<'_>) -> u16 {
+        // SAFETY: every load reads sixteen 32-bit values of an array of sixteen, and every
+        // masked store writes at most sixteen into one; unaligned accesses need no alignment.
+        unsafe {
+            let t = _mm512_loadu_ps(out.t.as_ptr());
+            let best_t = _mm512_loadu_ps(best.t.as_ptr());
+            let best_prim = _mm512_loadu_si512(best.prim.as_ptr().cast());
+            let id_v = _mm512_set1_epi32(id as i32);
+            // `t < best_t || (t == best_t && id < best_prim)`, unsigned as the `u32`s compare.
+            let closer = _mm512_mask_cmp_ps_mask::<_CMP_LT_OQ>(lanes, t, best_t);
+            let tie = _mm512_mask_cmp_ps_mask::<_CMP_EQ_OQ>(lanes, t, best_t)
+                & _mm512_cmplt_epu32_mask(id_v, best_prim);
+            let keep = closer | tie;
+            _mm512_mask_storeu_ps(best.t.as_mut_ptr(), keep, t);
+            _mm512_mask_storeu_epi32(best.prim.as_mut_ptr().cast(), keep, id_v);
+            _mm512_mask_storeu_ps(best.u.as_mut_ptr(), keep, _mm512_loadu_ps(out.u.as_ptr()));
+            _mm512_mask_storeu_ps(best.v.as_mut_ptr(), keep, _mm512_loadu_ps(out.v.as_ptr()));
+            keep
         }
     }
 }

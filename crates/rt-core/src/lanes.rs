@@ -560,7 +560,24 @@ impl Lanes {
                     u: at_mut(u, pair),
                     v: at_mut(v, pair),
                 };
-                crate::simd::keep16(self.isa, &out, id, inside, best).unwrap_or(0)
+                match crate::simd::keep16(self.isa, &out, id, inside, best) {
+                    Some(kept) => kept,
+                    // Only with AVX-512, which `watertight16` answering shows; lane by lane
+                    // otherwise, never dropped.
+                    None => {
+                        let o = (&out.t[..], &out.u[..], &out.v[..]);
+                        let base = pair * 2 * W;
+                        self.settle::<ANY>(
+                            tri,
+                            id,
+                            base,
+                            u32::from(inside),
+                            u32::from(inside),
+                            0,
+                            o,
+                        ) as u16
+                    }
+                }
             };
         }
         if out.zero & m != 0 {

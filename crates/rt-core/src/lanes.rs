@@ -101,84 +101,39 @@ impl Lanes {
     /// keeps one `Lanes`). Lanes past the bundle's length keep NaN as their best `t` and no
     /// primitive; the other arrays past it are never read for an answer.
     ///
-    /// Each lane's shear is [`Shear::new`] of its direction, eight lanes at a time: the same
-    /// comparisons pick the dominant axis, and the same division and products make the
-    /// factors, so every lane's are the scalar ones, bit for bit.
+    /// Each lane's shear is the one the bundle made ([`Shear::new`] of its direction, bit for
+    /// bit).
     // PERF: made lane by lane (each ray gathered back from the bundle, its shear made alone,
     // the whole ray kept for the scalar fallbacks) and moved out by value for every bundle,
     // this was a third of the time around a bundle walk; see `walk_groups_with` for the
     // figures.
     #[inline(always)]
     pub fn reset(&mut self, bundle: &Bundle) {
-        let n = bundle.len();
+        // Whole arrays, of a size the compiler copies inline; the lanes past the bundle's
+        // length are never read for an answer.
+        // PERF: copied to the bundle's length, each array went through a call to `memmove`:
+        // 12% of the samples of a profile of the frame around a bundle walk (`walk_groups`
+        // with a walk that does nothing, the teapot in a stadium), none now; the frame's time
+        // moved within its noise (5.7 -> 5.5 ns a ray).
+        fn flat<T>(v: &mut [[T; W]; STEPS]) -> &mut [T; BUNDLE_LANES] {
+            v.as_flattened_mut()
+                .try_into()
+                .expect("STEPS vectors of W lanes")
+        }
         for a in 0..3 {
-            self.origin[a].as_flattened_mut()[..n].copy_from_slice(&bundle.origin[a][..n]);
-            self.dir[a].as_flattened_mut()[..n].copy_from_slice(&bundle.dir[a][..n]);
-            self.inv_dir[a].as_flattened_mut()[..n].copy_from_slice(&bundle.inv_dir[a][..n]);
+            *flat(&mut self.origin[a]) = bundle.origin[a];
+            *flat(&mut self.dir[a]) = bundle.dir[a];
+            *flat(&mut self.inv_dir[a]) = bundle.inv_dir[a];
+            *flat(&mut self.shear[a]) = bundle.shear[a];
         }
-        self.t_min.as_flattened_mut()[..n].copy_from_slice(&bundle.t_min[..n]);
-        self.t_max.as_flattened_mut()[..n].copy_from_slice(&bundle.t_max[..n]);
-        let t = self.t.as_flattened_mut();
-        t[..n].copy_from_slice(&bundle.t_max[..n]);
-        t[n..].fill(f32::NAN);
-        self.prim.as_flattened_mut().fill(u32::MAX);
-        // Given the dominant axis `kz`, the other two as `Shear::new` orders them: swapped
-        // when the direction along `kz` is negative, which the bundle's octant says for all.
-        let octant = bundle.octant();
-        for (kz, order) in self.order.iter_mut().enumerate() {
-            let kx = if kz == 2 { 0 } else { kz + 1 };
-            let ky = if kx == 2 { 0 } else { kx + 1 };
-            *order = if octant >> kz & 1 != 0 {
-                [ky, kx, kz]
-            } else {
-                [kx, ky, kz]
-            };
-        }
-        let order = self.order;
-        self.by_axis = [0; 3];
-        let all = bundle.all_lanes();
-        for step in 0..n.div_ceil(W) {
-            // Not `array::map`, whose closure is not inlined into the walks' vector frame.
-            let d = [self.dir[0][step], self.dir[1][step], self.dir[2][step]];
-            // The rows each dominant axis reads, chosen once per step (the octant fixes them),
-            // so that the lanes below pick among whole vectors.
-            let rows = |kz: usize| [d[order[kz][0]], d[order[kz][1]], d[order[kz][2]]];
-            let (rx, ry, rz) = (rows(0), rows(1), rows(2));
-            // Each lane's dominant axis as two masks, and the direction components it reads
-            // picked by selects; then one division and two products per lane, in loops
-            // without branches so that they run as whole vectors.
-            // PERF: with a branch per axis around the division, the compiler divided three
-            // times per lane on half-width vectors, with masked stores; the frame of
-            // `Bundle::fill`'s measurement took 9.3 ns a ray then, 8.4 ns now.
-            let (mut x, mut y) = ([false; W], [false; W]);
-            let mut p = [[0.0f32; W]; 3];
-            for j in 0..W {
-                let (ax, ay, az) = (d[0][j].abs(), d[1][j].abs(), d[2][j].abs());
-                // `Shear::new`'s choice: x if it is at least both others, else y if it is at
-                // least z, else z.
-                x[j] = (ax >= ay) & (ax >= az);
-                y[j] = !x[j] & (ay >= az);
-                for k in 0..3 {
-                    let yz = if y[j] { ry[k][j] } else { rz[k][j] };
-                    p[k][j] = if x[j] { rx[k][j] } else { yz };
-                }
-            }
-            let (mut on_x, mut on_y) = (0u64, 0u64);
-            for j in 0..W {
-                // Lanes past the bundle's length may divide by zero here: an infinity never
-                // read.
-                let sz = 1.0 / p[2][j];
-                self.shear[0][step][j] = p[0][j] * sz;
-                self.shear[1][step][j] = p[1][j] * sz;
-                self.shear[2][step][j] = sz;
-                on_x |= u64::from(x[j]) << j;
-                on_y |= u64::from(y[j]) << j;
-            }
-            let valid = all >> (step * W) & 0xff;
-            self.by_axis[0] |= (on_x & valid) << (step * W);
-            self.by_axis[1] |= (on_y & valid) << (step * W);
-            self.by_axis[2] |= (!(on_x | on_y) & valid) << (step * W);
-        }
+        *flat(&mut self.t_min) = bundle.t_min;
+        *flat(&mut self.t_max) = bundle.t_max;
+        let t = flat(&mut self.t);
+        *t = bundle.t_max;
+        t[bundle.len()..].fill(f32::NAN);
+        *flat(&mut self.prim) = [u32::MAX; BUNDLE_LANES];
+        self.by_axis = bundle.by_axis;
+        self.order = crate::bundle::shear_orders(bundle.octant());
     }
 
     /// Lane `i` as a ray: the same bits as the ray it came from.

@@ -1,11 +1,11 @@
-//! Run-time choice of vector instructions for the bundle kernels ([`Lanes`](crate::bundle::Lanes))
-//! and the bundle walks ([`Isa::run`]).
+//! Run-time choice of vector instructions for the bundle kernels ([`Lanes`](crate::bundle::Lanes)),
+//! the filling of bundles ([`fill_sealed`]) and the bundle walks ([`Isa::run`]).
 //!
 //! The only `unsafe` of rt-core besides `pod_struct!`: the AVX2 and AVX-512 kernels and the
 //! frames the bundle walks run in, each called only when the CPU was found to have the
 //! features it is compiled with ([`Isa::available`]). Each kernel here has a portable twin in
-//! plain arrays ([`watertight8_portable`]) that it matches bit for bit: the same IEEE
-//! operations in the same order, no fused multiply-add.
+//! plain arrays ([`watertight8_portable`]; `Bundle::fill_sealed`'s passes) that it matches
+//! bit for bit: the same IEEE operations in the same order, no fused multiply-add.
 #![allow(unsafe_code)]
 
 use crate::Ray;
@@ -206,6 +206,42 @@ pub(crate) fn ray_columns8_portable(rays: &[Ray; 8]) -> RayColumns {
     c
 }
 
+/// What [`fill_sealed`] finds over a bundle's lanes: whether every lane bundles in its octant,
+/// and the bounds [`Bundle::lane_bounds`](crate::bundle::Bundle::lane_bounds) reports.
+pub(crate) struct Sealed {
+    pub good: bool,
+    pub origin_lo: [f32; 3],
+    pub origin_hi: [f32; 3],
+    pub inv_lo: [f32; 3],
+    pub inv_hi: [f32; 3],
+    pub t_min_lo: f32,
+}
+
+/// Fills `b`'s lanes with `rays` (one to eight groups of eight), each lane's shear and the
+/// lanes by dominant axis with them, and finds what [`Sealed`] holds, in one pass with AVX2;
+/// `None` with the portable instructions, which make the same in passes of their own
+/// (`Bundle::fill_sealed`).
+#[inline(always)]
+pub(crate) fn fill_sealed(
+    isa: Isa,
+    b: &mut crate::bundle::Bundle,
+    rays: &[[Ray; 8]],
+    octant: usize,
+) -> Option<Sealed> {
+    match isa {
+        #[cfg(target_arch = "x86_64")]
+        // SAFETY: callers hold `Isa::Avx2` or `Isa::Avx512` only when `Isa::available` found
+        // this CPU runs it (`Isa::detect`), and both include AVX2.
+        Isa::Avx2 | Isa::Avx512 if !rays.is_empty() && rays.len() <= 8 => {
+            Some(unsafe { x86::fill_sealed(b, rays, octant) })
+        }
+        _ => {
+            let _ = (b, rays, octant);
+            None
+        }
+    }
+}
+
 /// Runs `f` compiled with AVX-512F where `isa` is [`Isa::Avx512`] (else as it is), so that
 /// the sixteen-lane kernel inlines into the code `f` inlines.
 #[cfg(target_arch = "x86_64")]
@@ -248,9 +284,22 @@ mod x86 {
     #[inline]
     pub(super) fn ray_columns8(rays: &[Ray; 8]) -> RayColumns {
         let mut c = [[0.0f32; 8]; 11];
+        let v = columns8(rays);
+        for (c, v) in c.iter_mut().zip(v) {
+            // SAFETY: the store writes eight `f32` into an array of eight; unaligned stores need
+            // no alignment.
+            unsafe { _mm256_storeu_ps(c.as_mut_ptr(), v) };
+        }
+        c
+    }
+
+    /// The transpose of [`ray_columns8`], in registers.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    fn columns8(rays: &[Ray; 8]) -> [__m256; 11] {
         // SAFETY: `Ray` is `repr(C)`, eleven `f32` with no padding (asserted beside it), so
-        // each ray's fields 0..8 and 7..11 are 32 and 16 bytes inside it; unaligned loads and
-        // stores need no alignment, and every store writes eight `f32` into one array of eight.
+        // each ray's fields 0..8 and 7..11 are 32 and 16 bytes inside it; unaligned loads need
+        // no alignment.
         unsafe {
             let row = |i: usize| (&raw const rays[i]).cast::<f32>();
             let r: [__m256; 8] = std::array::from_fn(|i| _mm256_loadu_ps(row(i)));
@@ -273,15 +322,10 @@ mod x86 {
             let odd = |a, b| _mm256_shuffle_ps::<0xEE>(a, b);
             let s = [even(t0, t2), odd(t0, t2), even(t1, t3), odd(t1, t3)];
             let u = [even(t4, t6), odd(t4, t6), even(t5, t7), odd(t5, t7)];
+            let mut c = [_mm256_setzero_ps(); 11];
             for k in 0..4 {
-                _mm256_storeu_ps(
-                    c[k].as_mut_ptr(),
-                    _mm256_permute2f128_ps::<0x20>(s[k], u[k]),
-                );
-                _mm256_storeu_ps(
-                    c[k + 4].as_mut_ptr(),
-                    _mm256_permute2f128_ps::<0x31>(s[k], u[k]),
-                );
+                c[k] = _mm256_permute2f128_ps::<0x20>(s[k], u[k]);
+                c[k + 4] = _mm256_permute2f128_ps::<0x31>(s[k], u[k]);
             }
             // Fields 7..11 of ray `i` in the low half and of ray `i + 4` in the high half.
             let tail = |i: usize| {
@@ -291,11 +335,123 @@ mod x86 {
             let (q0, q1, q2, q3) = (tail(0), tail(1), tail(2), tail(3));
             let (a, b) = (lo(q0, q1), hi(q0, q1));
             let (d, e) = (lo(q2, q3), hi(q2, q3));
-            _mm256_storeu_ps(c[8].as_mut_ptr(), odd(a, d));
-            _mm256_storeu_ps(c[9].as_mut_ptr(), even(b, e));
-            _mm256_storeu_ps(c[10].as_mut_ptr(), odd(b, e));
+            c[8] = odd(a, d);
+            c[9] = even(b, e);
+            c[10] = odd(b, e);
+            c
         }
-        c
+    }
+
+    /// [`fill_sealed`](super::fill_sealed) with AVX2: for each group of eight rays, the
+    /// transpose of [`columns8`] stored into the bundle's lanes; the conditions of
+    /// `Bundle::all_bundle_in` as vector comparisons (each false for NaN, as the scalar
+    /// comparisons are); the running minima and maxima of `Bundle::seal`, with the same
+    /// comparisons (`_mm256_min_ps(a, b)` is `if a < b { a } else { b }`) and the same final
+    /// folds; and each lane's shear as `Bundle::shear_lanes` makes it, by the same comparisons,
+    /// selects, one division and two products.
+    #[target_feature(enable = "avx2")]
+    #[inline]
+    pub(super) fn fill_sealed(
+        b: &mut crate::bundle::Bundle,
+        rays: &[[Ray; 8]],
+        octant: usize,
+    ) -> super::Sealed {
+        use crate::bundle::{fold_hi, fold_lo, shear_orders};
+        let order = shear_orders(octant);
+        let splat = _mm256_set1_ps;
+        let abs = |x: __m256| _mm256_andnot_ps(splat(-0.0), x);
+        let le = |a: __m256, b: __m256| _mm256_cmp_ps::<_CMP_LE_OQ>(a, b);
+        let ge = |a: __m256, b: __m256| _mm256_cmp_ps::<_CMP_GE_OQ>(a, b);
+        let finite = |x: __m256| _mm256_cmp_ps::<_CMP_LT_OQ>(abs(x), splat(f32::INFINITY));
+        let and = |a: __m256, b: __m256| _mm256_and_ps(a, b);
+        let bits = |m: __m256| _mm256_movemask_ps(m) as u32;
+        let (dir_lo, dir_hi) = (*Ray::DIR_RANGE.start(), *Ray::DIR_RANGE.end());
+        let mut bad = 0u32;
+        let (mut lo, mut hi) = ([_mm256_setzero_ps(); 7], [_mm256_setzero_ps(); 6]);
+        b.by_axis = [0; 3];
+        for (g, eight) in rays.iter().enumerate() {
+            let c = columns8(eight);
+            let lanes = g * 8..g * 8 + 8;
+            let store = |v: &mut [f32; crate::bundle::BUNDLE_LANES], x: __m256| {
+                // SAFETY: `lanes` is eight lanes of an array of `BUNDLE_LANES` (`g` < 8, as
+                // the caller checks); unaligned stores need no alignment.
+                unsafe { _mm256_storeu_ps(v[lanes.clone()].as_mut_ptr(), x) }
+            };
+            for a in 0..3 {
+                store(&mut b.origin[a], c[a]);
+                store(&mut b.dir[a], c[3 + a]);
+                store(&mut b.inv_dir[a], c[6 + a]);
+            }
+            store(&mut b.t_min, c[9]);
+            store(&mut b.t_max, c[10]);
+            // `bundles_ray`, lane by lane, and the octant's signs.
+            let (d, t0, t1) = ([c[3], c[4], c[5]], c[9], c[10]);
+            let mut ok = finite(t0);
+            for a in 0..3 {
+                ok = and(ok, le(abs(c[a]), splat(Ray::MAX_ORIGIN)));
+                ok = and(ok, finite(d[a]));
+                ok = and(ok, _mm256_cmp_ps::<_CMP_NEQ_OQ>(d[a], _mm256_setzero_ps()));
+                ok = and(ok, finite(c[6 + a]));
+                let negative = if octant >> a & 1 != 0 { 0xff } else { 0 };
+                bad |= bits(d[a]) ^ negative;
+            }
+            let largest = _mm256_max_ps(_mm256_max_ps(abs(d[0]), abs(d[1])), abs(d[2]));
+            ok = and(
+                ok,
+                and(ge(largest, splat(dir_lo)), le(largest, splat(dir_hi))),
+            );
+            ok = and(ok, and(ge(t0, _mm256_setzero_ps()), le(t0, t1)));
+            bad |= !bits(ok) & 0xff;
+            // The bounds over the lanes.
+            let low = [c[0], c[1], c[2], c[6], c[7], c[8], c[9]];
+            for k in 0..7 {
+                lo[k] = if g == 0 {
+                    low[k]
+                } else {
+                    _mm256_min_ps(lo[k], low[k])
+                };
+            }
+            for k in 0..6 {
+                hi[k] = if g == 0 {
+                    low[k]
+                } else {
+                    _mm256_max_ps(hi[k], low[k])
+                };
+            }
+            // Each lane's shear: x if its magnitude is at least both others', else y if at
+            // least z's, else z; the factors from the components in that axis order.
+            let (ax, ay, az) = (abs(d[0]), abs(d[1]), abs(d[2]));
+            let x = and(ge(ax, ay), ge(ax, az));
+            let y = _mm256_andnot_ps(x, ge(ay, az));
+            let pick = |k: usize| {
+                let yz = _mm256_blendv_ps(d[order[2][k]], d[order[1][k]], y);
+                _mm256_blendv_ps(yz, d[order[0][k]], x)
+            };
+            let sz = _mm256_div_ps(splat(1.0), pick(2));
+            store(&mut b.shear[0], _mm256_mul_ps(pick(0), sz));
+            store(&mut b.shear[1], _mm256_mul_ps(pick(1), sz));
+            store(&mut b.shear[2], sz);
+            let (on_x, on_y) = (u64::from(bits(x)), u64::from(bits(y)));
+            b.by_axis[0] |= on_x << (g * 8);
+            b.by_axis[1] |= on_y << (g * 8);
+            b.by_axis[2] |= (!(on_x | on_y) & 0xff) << (g * 8);
+        }
+        let out = |v: __m256| {
+            let mut a = [0.0f32; 8];
+            // SAFETY: the store writes eight `f32` into an array of eight.
+            unsafe { _mm256_storeu_ps(a.as_mut_ptr(), v) };
+            a
+        };
+        let lows: [f32; 7] = std::array::from_fn(|k| fold_lo(out(lo[k])));
+        let highs: [f32; 6] = std::array::from_fn(|k| fold_hi(out(hi[k])));
+        super::Sealed {
+            good: bad == 0,
+            origin_lo: [lows[0], lows[1], lows[2]],
+            origin_hi: [highs[0], highs[1], highs[2]],
+            inv_lo: [lows[3], lows[4], lows[5]],
+            inv_hi: [highs[3], highs[4], highs[5]],
+            t_min_lo: lows[6],
+        }
     }
 
     /// [`watertight8_portable`](crate::lanes::watertight8_portable) in AVX2: the same

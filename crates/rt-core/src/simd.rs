@@ -206,6 +206,24 @@ pub(crate) fn ray_columns8_portable(rays: &[Ray; 8]) -> RayColumns {
     c
 }
 
+/// Asks the CPU to bring cache line `line` of the rays `rays` (the one at byte `64 * line`)
+/// into its caches, if the rays reach it; a hint only, which changes no value.
+#[inline(always)]
+pub(crate) fn prefetch_line(rays: &[Ray], line: usize) {
+    let offset = line * 64;
+    #[cfg(target_arch = "x86_64")]
+    if offset < size_of_val(rays) {
+        // SAFETY: the address lies inside `rays` (`offset` is less than its size in bytes); a
+        // prefetch reads nothing a program sees and never faults.
+        unsafe {
+            use std::arch::x86_64::{_MM_HINT_T0, _mm_prefetch};
+            _mm_prefetch::<_MM_HINT_T0>(rays.as_ptr().cast::<i8>().add(offset));
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (rays, offset);
+}
+
 /// What [`fill_sealed`] finds over a bundle's lanes: whether every lane bundles in its octant,
 /// and the bounds [`Bundle::lane_bounds`](crate::bundle::Bundle::lane_bounds) reports.
 pub(crate) struct Sealed {

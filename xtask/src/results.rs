@@ -208,6 +208,11 @@ fn measure_all(args: &Args) -> Result<PathBuf, String> {
         }
     }
     bundle_table(&mut page, &runs);
+    // Minutes of runs over the peers' scenes: the quick page, which checks the generator, leaves
+    // it out.
+    if !args.quick {
+        page += &one_ray_bundles()?;
+    }
 
     page += "\n## Closest points\n\nThe primitive nearest to each point: half of the points \
              anywhere in the scene box grown by a quarter on every side, half within 2% of its \
@@ -609,20 +614,16 @@ fn animate_table(page: &mut String, run: &Run) {
     }
 }
 
-/// rt-bvh against Embree 3: the peers benchmark's own tables.
-fn embree() -> Result<String, String> {
-    let command = "cargo bench -p rt-benches --features embree --bench peers";
+/// Runs `cargo bench -p rt-benches` with `args` and gives back the command as the page shows it
+/// and what it printed; a bench that cannot run or fails is an error naming the command and its
+/// last line.
+fn cargo_bench(args: &[&str]) -> Result<(String, String), String> {
+    let mut argv = vec!["bench", "-p", "rt-benches"];
+    argv.extend(args);
+    let command = format!("cargo {}", argv.join(" "));
     eprintln!("{command}");
     let out = Command::new("cargo")
-        .args([
-            "bench",
-            "-p",
-            "rt-benches",
-            "--features",
-            "embree",
-            "--bench",
-            "peers",
-        ])
+        .args(&argv)
         .output()
         .map_err(|e| format!("{command}: cannot run: {e}"))?;
     if !out.status.success() {
@@ -634,13 +635,29 @@ fn embree() -> Result<String, String> {
             .unwrap_or("");
         return Err(format!("{command} failed ({}): {last}", out.status));
     }
+    Ok((command, String::from_utf8_lossy(&out.stdout).into_owned()))
+}
+
+/// What a bundle of one ray costs against a single-ray call: the `bundle_of_one` benchmark's
+/// own tables.
+fn one_ray_bundles() -> Result<String, String> {
+    let (command, table) = cargo_bench(&["--bench", "bundle_of_one"])?;
+    Ok(format!(
+        "\n### One-ray bundles\n\n`{command}`: a renderer that hands over one ray at a time \
+         through the bundle queries must not pay for them (the target: at most 2% more than \
+         the single-ray call).\n\n{table}"
+    ))
+}
+
+/// rt-bvh against Embree 3: the peers benchmark's own tables.
+fn embree() -> Result<String, String> {
+    let (command, tables) = cargo_bench(&["--features", "embree", "--bench", "peers"])?;
     Ok(format!(
         "\n## rt-bvh against Embree 3\n\n`{command}`: rt-bvh's presets and Embree 3 on the same \
          triangles and the same rays, traced on one thread, passes interleaved, medians. Its \
          primary rays come from the scenes' own cameras, whose images these meshes do not fill \
          (see the hit shares of the primary-ray tables above): for the many rays that leave the \
          box early it times the cost of a call rather than of a traversal, so judge the \
-         primary-ray ratio with that in mind.\n\n{}",
-        String::from_utf8_lossy(&out.stdout)
+         primary-ray ratio with that in mind.\n\n{tables}"
     ))
 }

@@ -903,9 +903,10 @@ fn walk_runs<S: Stats, A: LaneAnswers, const ANY: bool>(
         // with: the peers benchmark's framing views of the bunny 52.7 -> 55.0, the sphereflake
         // 61.9 -> 63.5, the teapot in a stadium 56.8 -> 65.2; the bunny's filled view 36.0 ->
         // 38.7, the teapot's close view 38.7 -> 41.8 (medians of three). The whole next run
-        // asked for at once before this run's walk made them slower (bunny 51.9 -> 48.2,
-        // stadium 58.4 -> 48.9); two runs ahead, no better than none; the answers' own lines
-        // asked for ahead too, slower (bunny 56.1 -> 54.5).
+        // asked for at once before this run's walk made them slower (medians of three: bunny
+        // 51.9 -> 45.6, stadium 58.4 -> 48.9); two runs ahead, mixed (bunny 52.7 -> 51.0,
+        // sphereflake 61.9 -> 59.3, stadium 56.8 -> 61.1); the answers' own lines asked for
+        // ahead too, slower (bunny 56.1 -> 54.5, stadium 64.8 -> 61.8).
         let ahead = rays.get(base + BUNDLE_LANES..).unwrap_or(&[]);
         let ahead = &ahead[..ahead.len().min(BUNDLE_LANES)];
         bundler.run(

@@ -245,7 +245,7 @@ pub(crate) fn wide_bundle<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
 
 /// The binary tree's bundle walk: the packet traversal of Wald, Boulos & Shirley (2007) with a
 /// lane mask per stack entry, as rt-kdtree's over its cells. At each node
-/// [`narrow`](rt_core::bundle::narrow) keeps the lanes that may enter its box: all of them when
+/// [`narrow`] keeps the lanes that may enter its box: all of them when
 /// the first active lane's own slab test enters it, none when the bundle's interval bound
 /// rules it out, else each lane's own test. Children go nearest first along their split axis
 /// in the bundle's octant. At a leaf each primitive is tested against the lanes that reached

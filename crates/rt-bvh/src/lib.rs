@@ -634,6 +634,25 @@ impl<S: Stats, const ANY: bool> LeafWalk for OneRay<'_, S, ANY> {
     }
 }
 
+/// One ray's closest hit through [`traverse::wide`], written into `out`
+/// ([`simd::dispatch_into`] says why).
+struct OneRayInto<'a, S> {
+    ray: &'a Ray,
+    sort: bool,
+    stats: &'a mut S,
+    out: &'a mut Option<Hit>,
+}
+
+impl<S: Stats> LeafWalk for OneRayInto<'_, S> {
+    type Out = ();
+    #[inline(always)]
+    fn walk<L: traverse::Leaves>(self, nodes: &[WideNode], isa: Isa, leaves: &L) {
+        simd::dispatch_into::<_, S>(
+            isa, nodes, leaves, self.ray, self.sort, self.stats, self.out,
+        )
+    }
+}
+
 /// One bundle through [`bundle::wide_bundle`].
 struct OneBundle<'a, S, const ANY: bool>(&'a Bundle, &'a mut Lanes, &'a mut S);
 
@@ -788,10 +807,24 @@ impl<P: Primitive> Accel for Bvh<P> {
         out: &mut [Option<Hit>],
         stats: &mut S,
     ) {
-        // One ray goes straight to the single-ray query.
+        // One ray goes straight to the single-ray walk, which writes its answer in place
+        // (`simd::dispatch_into` says why).
         if let ([ray], [slot]) = (rays, &mut *out) {
             stats.single_ray();
-            *slot = self.query::<S, false>(ray, stats);
+            match &self.tree {
+                Tree::Wide(w) if ray.is_valid() && !w.nodes.is_empty() => {
+                    w.with_leaves(OneRayInto {
+                        ray,
+                        sort: w.ablation.sort_children,
+                        stats,
+                        out: slot,
+                    });
+                }
+                Tree::Binary { nodes, items } if ray.is_valid() => {
+                    traverse::binary_into::<P, S>(nodes, items, ray, stats, slot)
+                }
+                _ => *slot = self.query::<S, false>(ray, stats),
+            }
             return;
         }
         self.bundle_query::<S, false>(rays, out.len(), stats, |slot, hit| out[slot] = hit);

@@ -32,6 +32,30 @@ pub(crate) fn binary<P: Primitive, S: Stats, const ANY: bool>(
     ray: &Ray,
     stats: &mut S,
 ) -> Option<Hit> {
+    binary_walk::<P, S, ANY>(nodes, items, ray, stats)
+}
+
+/// [`binary`]'s closest hit written into `out`, the caller's slot, rather than copied there
+/// (`simd::dispatch_into` says why that copy waits).
+#[inline(never)]
+pub(crate) fn binary_into<P: Primitive, S: Stats>(
+    nodes: &[Node],
+    items: &Items<P>,
+    ray: &Ray,
+    stats: &mut S,
+    out: &mut Option<Hit>,
+) {
+    *out = binary_walk::<P, S, false>(nodes, items, ray, stats);
+}
+
+/// The body of [`binary`] and [`binary_into`].
+#[inline(always)]
+fn binary_walk<P: Primitive, S: Stats, const ANY: bool>(
+    nodes: &[Node],
+    items: &Items<P>,
+    ray: &Ray,
+    stats: &mut S,
+) -> Option<Hit> {
     let mut best = Hit {
         prim: u32::MAX,
         t: ray.t_max,

@@ -133,6 +133,15 @@ fn compare<P: Primitive>(tree: &Bvh<P>, kernels: Kernels, rays: &[Ray]) -> usize
             "{kernels:?} counted events\n  ray: {}",
             ray.to_rust()
         );
+        // A bundle of one ray writes its answer in place through its own entry to each kernel.
+        let mut one = [None];
+        simd.intersect_bundle(std::slice::from_ref(ray), &mut one);
+        assert!(
+            same(one[0], r),
+            "{kernels:?} bundle of one {:?}, scalar {r:?}\n  ray: {}",
+            one[0],
+            ray.to_rust()
+        );
         let (s, r) = (simd.occluded(ray), scalar.occluded(ray));
         assert_eq!(s, r, "{kernels:?} any hit\n  ray: {}", ray.to_rust());
         hits += usize::from(s);

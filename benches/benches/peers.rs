@@ -91,12 +91,7 @@ fn embree_tracer(name: &str, scene: rt_benches::embree::EmbreeScene) -> Tracer {
             if any {
                 s2.occluded(r).then_some(OCCLUDED)
             } else {
-                s2.intersect(r).map(|(prim, t)| Hit {
-                    prim,
-                    t,
-                    u: 0.0,
-                    v: 0.0,
-                })
+                s2.intersect(r)
             }
         }),
         exact: false,

@@ -7,7 +7,7 @@
 #![allow(unsafe_code)]
 
 use embree::sys;
-use rt_core::{Ray, Triangle};
+use rt_core::{Hit, Ray, Triangle};
 use std::ffi::CString;
 
 /// Embree's build quality (`rtcSetSceneBuildQuality`).
@@ -124,9 +124,10 @@ impl EmbreeScene {
         }
     }
 
-    /// The closest hit: Embree's primitive id and `t`.
+    /// The closest hit: Embree's primitive id, `t` and surface coordinates, the answer rt-core's
+    /// structures give (Embree's `u` and `v` weigh the second and third vertex, as theirs do).
     #[inline]
-    pub fn intersect(&self, ray: &Ray) -> Option<(u32, f32)> {
+    pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let mut rayhit = sys::RTCRayHit {
             ray: to_rtc(ray),
             hit: sys::RTCHit {
@@ -145,7 +146,12 @@ impl EmbreeScene {
         // are valid, properly aligned (`RTCRayHit` is `repr(align(16))`) locals that Embree only
         // accesses during the call.
         unsafe { sys::rtcIntersect1(self.scene, &mut context, &mut rayhit) };
-        (rayhit.hit.geomID != INVALID_ID).then_some((rayhit.hit.primID, rayhit.ray.tfar))
+        (rayhit.hit.geomID != INVALID_ID).then_some(Hit {
+            prim: rayhit.hit.primID,
+            t: rayhit.ray.tfar,
+            u: rayhit.hit.u,
+            v: rayhit.hit.v,
+        })
     }
 
     /// Whether anything is hit in the ray's interval (Embree sets `tfar` to `-inf` then).
@@ -169,7 +175,7 @@ struct Valid16([i32; PACKET]);
 impl EmbreeScene {
     /// The closest hits of `rays` into `out` (as many as both have), `PACKET` consecutive rays per
     /// `rtcIntersect16` call with the coherent flag: Embree's packet path for coherent rays.
-    pub fn intersect_packets(&self, rays: &[Ray], out: &mut [Option<(u32, f32)>]) {
+    pub fn intersect_packets(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
         for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
             let n = rays.len().min(out.len());
             let mut valid = Valid16([0; PACKET]);
@@ -191,8 +197,12 @@ impl EmbreeScene {
             // 16-wide loads require, and only accessed during the call.
             unsafe { sys::rtcIntersect16(valid.0.as_ptr(), self.scene, &mut context, &mut packet) };
             for (i, o) in out[..n].iter_mut().enumerate() {
-                *o = (packet.hit.geomID[i] != INVALID_ID)
-                    .then_some((packet.hit.primID[i], packet.ray.tfar[i]));
+                *o = (packet.hit.geomID[i] != INVALID_ID).then_some(Hit {
+                    prim: packet.hit.primID[i],
+                    t: packet.ray.tfar[i],
+                    u: packet.hit.u[i],
+                    v: packet.hit.v[i],
+                });
             }
         }
     }

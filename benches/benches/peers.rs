@@ -3,8 +3,8 @@
 //! and on all threads, over the bunny, the teapot, the sphereflake and the teapot in a stadium.
 //! It prints the measurements and the ratio table (rt-bvh's default preset ÷ Embree, per scene
 //! and ray kind, with geometric means), so nobody divides by hand, and a table of rt-bvh's ray
-//! bundles against its single rays and Embree's 16-ray packets, on the framing view and on a
-//! closer one, with each ray set's hit share.
+//! bundles against its single rays and Embree's coherent paths (16- and 8-ray packets, 64-ray
+//! streams), on the framing view and on a closer one, with each ray set's hit share.
 //!
 //! ```sh
 //! cargo bench -p rt-benches --features embree --bench peers            # with Embree
@@ -501,7 +501,12 @@ fn bench_bundles(scene: &BenchScene, o: &Options, out: &mut Vec<BundleResult>) {
             #[cfg(feature = "embree")]
             {
                 let embree = &embree;
-                names.extend(["embree medium", "embree medium packets16"]);
+                names.extend([
+                    "embree medium",
+                    "embree medium packets16",
+                    "embree medium packets8",
+                    "embree medium stream64",
+                ]);
                 fs.push(Box::new(move || {
                     let n = if any {
                         rays.iter().filter(|r| embree.occluded(r)).count()
@@ -512,17 +517,33 @@ fn bench_bundles(scene: &BenchScene, o: &Options, out: &mut Vec<BundleResult>) {
                     };
                     std::hint::black_box(n);
                 }));
+                use rt_benches::embree::EmbreeScene;
                 let packet_out = &packet_out;
-                fs.push(Box::new(move || {
-                    let (mut hit, mut blocked) =
-                        (packet_out.0.borrow_mut(), packet_out.1.borrow_mut());
-                    if any {
-                        embree.occluded_packets(rays, &mut blocked);
-                    } else {
-                        embree.intersect_packets(rays, &mut hit);
-                    }
-                    std::hint::black_box((&*hit, &*blocked));
-                }));
+                type Closest = fn(&EmbreeScene, &[Ray], &mut [Option<Hit>]);
+                type Any = fn(&EmbreeScene, &[Ray], &mut [bool]);
+                let paths: [(Closest, Any); 3] = [
+                    (
+                        EmbreeScene::intersect_packets,
+                        EmbreeScene::occluded_packets,
+                    ),
+                    (
+                        EmbreeScene::intersect_packets8,
+                        EmbreeScene::occluded_packets8,
+                    ),
+                    (EmbreeScene::intersect_stream, EmbreeScene::occluded_stream),
+                ];
+                for (closest, any_hit) in paths {
+                    fs.push(Box::new(move || {
+                        let (mut hit, mut blocked) =
+                            (packet_out.0.borrow_mut(), packet_out.1.borrow_mut());
+                        if any {
+                            any_hit(embree, rays, &mut blocked);
+                        } else {
+                            closest(embree, rays, &mut hit);
+                        }
+                        std::hint::black_box((&*hit, &*blocked));
+                    }));
+                }
             }
             let ms = time_interleaved(&fs, o.passes);
             out.push(BundleResult {
@@ -551,12 +572,15 @@ fn bundle_report(results: &[BundleResult]) -> String {
     let _ = writeln!(
         s,
         "\nBundles: primary rays in 8×8 pixel tiles and their shadow rays in the same order, \
-         single-threaded; Embree's packets take 16 consecutive rays (8×2 pixels) with the coherent \
-         flag. Mrays/s; bundles ÷ single rays and bundles ÷ Embree's packets\n"
+         single-threaded. Embree's coherent paths, each with the coherent flag: packets of 16 \
+         consecutive rays (8×2 pixels), packets of 8 (one pixel row of a tile), and streams of 64 \
+         (a tile, `rtcIntersect1M` / `rtcOccluded1M`, which Embree gathers into packets itself). \
+         Mrays/s; bundles ÷ single rays, and bundles ÷ the fastest of Embree's coherent paths on \
+         that row\n"
     );
     let _ = writeln!(
         s,
-        "| scene | view | rays | count | hit | {} | bundles ÷ single | bundles ÷ packets |",
+        "| scene | view | rays | count | hit | {} | bundles ÷ single | bundles ÷ Embree's best |",
         names.join(" | ")
     );
     let _ = writeln!(
@@ -565,6 +589,19 @@ fn bundle_report(results: &[BundleResult]) -> String {
         " ---: |".repeat(names.len() + 2)
     );
     let get = |r: &BundleResult, name: &str| r.mrays.iter().find(|(n, _)| *n == name).map(|m| m.1);
+    // The bundles against the fastest of Embree's coherent paths on this row.
+    let best_embree = |r: &BundleResult| {
+        let best = r
+            .mrays
+            .iter()
+            .filter(|(n, _)| n.starts_with("embree medium "))
+            .map(|m| m.1)
+            .reduce(f64::max);
+        match (get(r, "rt-bvh wide bundles"), best) {
+            (Some(a), Some(b)) => format!("{:.2}", a / b),
+            _ => "-".into(),
+        }
+    };
     for r in results {
         let cells: Vec<String> = r.mrays.iter().map(|(_, m)| format!("{m:.2}")).collect();
         let over = |a: &str, b: &str| match (get(r, a), get(r, b)) {
@@ -581,7 +618,7 @@ fn bundle_report(results: &[BundleResult]) -> String {
             100.0 * r.hit_share,
             cells.join(" | "),
             over("rt-bvh wide bundles", "rt-bvh wide"),
-            over("rt-bvh wide bundles", "embree medium packets16"),
+            best_embree(r),
         );
     }
     s

@@ -7,6 +7,7 @@
 #![allow(unsafe_code)]
 
 use embree::sys;
+use rt_core::glam::Vec3;
 use rt_core::{Hit, Ray, Triangle};
 use std::ffi::CString;
 
@@ -130,16 +131,7 @@ impl EmbreeScene {
     pub fn intersect(&self, ray: &Ray) -> Option<Hit> {
         let mut rayhit = sys::RTCRayHit {
             ray: to_rtc(ray),
-            hit: sys::RTCHit {
-                Ng_x: 0.0,
-                Ng_y: 0.0,
-                Ng_z: 0.0,
-                u: 0.0,
-                v: 0.0,
-                primID: INVALID_ID,
-                geomID: INVALID_ID,
-                instID: [INVALID_ID],
-            },
+            hit: no_hit(),
         };
         let mut context = context();
         // SAFETY: `self.scene` is a committed scene, alive until `Drop`; `context` and `rayhit`
@@ -168,64 +160,175 @@ impl EmbreeScene {
 /// The lanes of one Embree packet call (`rtcIntersect16`, `rtcOccluded16`).
 pub const PACKET: usize = 16;
 
-/// A packet's valid mask: -1 for an active lane, 0 for an unused one, aligned as Embree loads it.
-#[repr(C, align(64))]
-struct Valid16([i32; PACKET]);
+/// The lanes of one 8-wide Embree packet call (`rtcIntersect8`).
+pub const PACKET8: usize = 8;
+
+/// The rays of one Embree stream call (`rtcIntersect1M`): a camera's 8×8 tile.
+pub const STREAM: usize = 64;
+
+/// Embree's packet calls of one width with the coherent flag, as two methods of
+/// [`EmbreeScene`]: the closest hits of `rays` into `out` (as many as both have), and whether
+/// anything is hit in each ray's interval, `$n` consecutive rays per call.
+macro_rules! packet_calls {
+    ($n:expr, $valid:ident, $align:literal, $rayhit:ident, $ray:ident, $intersect:ident,
+     $occluded:ident, $closest:ident, $any:ident) => {
+        /// A packet's valid mask: -1 for an active lane, 0 for an unused one, aligned as Embree
+        /// loads it.
+        #[repr(C, align($align))]
+        struct $valid([i32; $n]);
+
+        impl EmbreeScene {
+            #[doc = concat!("The closest hits of `rays` into `out`, ", stringify!($n),
+                        " rays per `", stringify!($intersect), "` call with the coherent flag.")]
+            pub fn $closest(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+                for (rays, out) in rays.chunks($n).zip(out.chunks_mut($n)) {
+                    let n = rays.len().min(out.len());
+                    let mut valid = $valid([0; $n]);
+                    // SAFETY: the packet is plain old data (arrays of f32 and u32), for which
+                    // all zero bytes are a valid value.
+                    let mut packet: sys::$rayhit = unsafe { std::mem::zeroed() };
+                    for (i, r) in rays[..n].iter().enumerate() {
+                        valid.0[i] = -1;
+                        let p = &mut packet.ray;
+                        (p.org_x[i], p.org_y[i], p.org_z[i]) = (r.origin.x, r.origin.y, r.origin.z);
+                        (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (r.dir().x, r.dir().y, r.dir().z);
+                        (p.tnear[i], p.tfar[i], p.mask[i]) = (r.t_min, r.t_max, u32::MAX);
+                        packet.hit.geomID[i] = INVALID_ID;
+                        packet.hit.primID[i] = INVALID_ID;
+                    }
+                    let mut context = coherent_context();
+                    // SAFETY: a committed scene alive until `Drop`; `valid` and `packet` are
+                    // locals aligned as Embree's packet loads require (the mask by its type,
+                    // the packet by bindgen's `repr(align)`), only accessed during the call.
+                    unsafe {
+                        sys::$intersect(valid.0.as_ptr(), self.scene, &mut context, &mut packet)
+                    };
+                    for (i, o) in out[..n].iter_mut().enumerate() {
+                        *o = (packet.hit.geomID[i] != INVALID_ID).then_some(Hit {
+                            prim: packet.hit.primID[i],
+                            t: packet.ray.tfar[i],
+                            u: packet.hit.u[i],
+                            v: packet.hit.v[i],
+                        });
+                    }
+                }
+            }
+
+            #[doc = concat!("Whether anything is hit in each ray's interval, into `out`, ",
+                        stringify!($n), " rays per `", stringify!($occluded),
+                        "` call with the coherent flag.")]
+            pub fn $any(&self, rays: &[Ray], out: &mut [bool]) {
+                for (rays, out) in rays.chunks($n).zip(out.chunks_mut($n)) {
+                    let n = rays.len().min(out.len());
+                    let mut valid = $valid([0; $n]);
+                    // SAFETY: as in the closest-hit call: plain old data, all zeros valid.
+                    let mut p: sys::$ray = unsafe { std::mem::zeroed() };
+                    for (i, r) in rays[..n].iter().enumerate() {
+                        valid.0[i] = -1;
+                        (p.org_x[i], p.org_y[i], p.org_z[i]) = (r.origin.x, r.origin.y, r.origin.z);
+                        (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (r.dir().x, r.dir().y, r.dir().z);
+                        (p.tnear[i], p.tfar[i], p.mask[i]) = (r.t_min, r.t_max, u32::MAX);
+                    }
+                    let mut context = coherent_context();
+                    // SAFETY: as in the closest-hit call.
+                    unsafe { sys::$occluded(valid.0.as_ptr(), self.scene, &mut context, &mut p) };
+                    for (i, o) in out[..n].iter_mut().enumerate() {
+                        *o = p.tfar[i] == f32::NEG_INFINITY;
+                    }
+                }
+            }
+        }
+    };
+}
+
+packet_calls!(
+    PACKET,
+    Valid16,
+    64,
+    RTCRayHit16,
+    RTCRay16,
+    rtcIntersect16,
+    rtcOccluded16,
+    intersect_packets,
+    occluded_packets
+);
+packet_calls!(
+    PACKET8,
+    Valid8,
+    32,
+    RTCRayHit8,
+    RTCRay8,
+    rtcIntersect8,
+    rtcOccluded8,
+    intersect_packets8,
+    occluded_packets8
+);
 
 impl EmbreeScene {
-    /// The closest hits of `rays` into `out` (as many as both have), `PACKET` consecutive rays per
-    /// `rtcIntersect16` call with the coherent flag: Embree's packet path for coherent rays.
-    pub fn intersect_packets(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
-        for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+    /// The closest hits of `rays` into `out`, `STREAM` consecutive rays per `rtcIntersect1M`
+    /// call with the coherent flag: Embree's stream path, which gathers the stream's rays into
+    /// packets itself.
+    pub fn intersect_stream(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        let blank = sys::RTCRayHit {
+            ray: to_rtc(&Ray::new(Vec3::ZERO, Vec3::X)),
+            hit: no_hit(),
+        };
+        let mut stream = [blank; STREAM];
+        for (rays, out) in rays.chunks(STREAM).zip(out.chunks_mut(STREAM)) {
             let n = rays.len().min(out.len());
-            let mut valid = Valid16([0; PACKET]);
-            // SAFETY: `RTCRayHit16` is plain old data (arrays of f32 and u32), for which all
-            // zero bytes are a valid value.
-            let mut packet: sys::RTCRayHit16 = unsafe { std::mem::zeroed() };
-            for (i, r) in rays[..n].iter().enumerate() {
-                valid.0[i] = -1;
-                let p = &mut packet.ray;
-                (p.org_x[i], p.org_y[i], p.org_z[i]) = (r.origin.x, r.origin.y, r.origin.z);
-                (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (r.dir().x, r.dir().y, r.dir().z);
-                (p.tnear[i], p.tfar[i], p.mask[i]) = (r.t_min, r.t_max, u32::MAX);
-                packet.hit.geomID[i] = INVALID_ID;
-                packet.hit.primID[i] = INVALID_ID;
+            for (s, r) in stream.iter_mut().zip(&rays[..n]) {
+                *s = sys::RTCRayHit {
+                    ray: to_rtc(r),
+                    ..blank
+                };
             }
             let mut context = coherent_context();
-            // SAFETY: a committed scene alive until `Drop`; `valid` and `packet` are locals
-            // aligned to 64 bytes (`Valid16` and bindgen's `repr(align(64))`), as Embree's
-            // 16-wide loads require, and only accessed during the call.
-            unsafe { sys::rtcIntersect16(valid.0.as_ptr(), self.scene, &mut context, &mut packet) };
-            for (i, o) in out[..n].iter_mut().enumerate() {
-                *o = (packet.hit.geomID[i] != INVALID_ID).then_some(Hit {
-                    prim: packet.hit.primID[i],
-                    t: packet.ray.tfar[i],
-                    u: packet.hit.u[i],
-                    v: packet.hit.v[i],
+            // SAFETY: a committed scene; `stream` holds at least `n` valid `RTCRayHit`s laid
+            // out `size_of::<RTCRayHit>()` bytes apart, aligned to 16 as Embree requires, and
+            // is only accessed during the call.
+            unsafe {
+                sys::rtcIntersect1M(
+                    self.scene,
+                    &mut context,
+                    stream.as_mut_ptr(),
+                    n as u32,
+                    std::mem::size_of::<sys::RTCRayHit>(),
+                )
+            };
+            for (o, s) in out[..n].iter_mut().zip(&stream) {
+                *o = (s.hit.geomID != INVALID_ID).then_some(Hit {
+                    prim: s.hit.primID,
+                    t: s.ray.tfar,
+                    u: s.hit.u,
+                    v: s.hit.v,
                 });
             }
         }
     }
 
-    /// Whether anything is hit in each ray's interval, into `out`, `PACKET` rays per
-    /// `rtcOccluded16` call with the coherent flag.
-    pub fn occluded_packets(&self, rays: &[Ray], out: &mut [bool]) {
-        for (rays, out) in rays.chunks(PACKET).zip(out.chunks_mut(PACKET)) {
+    /// Whether anything is hit in each ray's interval, into `out`, `STREAM` rays per
+    /// `rtcOccluded1M` call with the coherent flag.
+    pub fn occluded_stream(&self, rays: &[Ray], out: &mut [bool]) {
+        let blank = to_rtc(&Ray::new(Vec3::ZERO, Vec3::X));
+        let mut stream = [blank; STREAM];
+        for (rays, out) in rays.chunks(STREAM).zip(out.chunks_mut(STREAM)) {
             let n = rays.len().min(out.len());
-            let mut valid = Valid16([0; PACKET]);
-            // SAFETY: as in `intersect_packets`: plain old data, all zeros valid.
-            let mut p: sys::RTCRay16 = unsafe { std::mem::zeroed() };
-            for (i, r) in rays[..n].iter().enumerate() {
-                valid.0[i] = -1;
-                (p.org_x[i], p.org_y[i], p.org_z[i]) = (r.origin.x, r.origin.y, r.origin.z);
-                (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (r.dir().x, r.dir().y, r.dir().z);
-                (p.tnear[i], p.tfar[i], p.mask[i]) = (r.t_min, r.t_max, u32::MAX);
+            for (s, r) in stream.iter_mut().zip(&rays[..n]) {
+                *s = to_rtc(r);
             }
             let mut context = coherent_context();
-            // SAFETY: as in `intersect_packets`.
-            unsafe { sys::rtcOccluded16(valid.0.as_ptr(), self.scene, &mut context, &mut p) };
-            for (i, o) in out[..n].iter_mut().enumerate() {
-                *o = p.tfar[i] == f32::NEG_INFINITY;
+            // SAFETY: as in `intersect_stream`, with `RTCRay`s.
+            unsafe {
+                sys::rtcOccluded1M(
+                    self.scene,
+                    &mut context,
+                    stream.as_mut_ptr(),
+                    n as u32,
+                    std::mem::size_of::<sys::RTCRay>(),
+                )
+            };
+            for (o, s) in out[..n].iter_mut().zip(&stream) {
+                *o = s.tfar == f32::NEG_INFINITY;
             }
         }
     }
@@ -269,6 +372,20 @@ fn coherent_context() -> sys::RTCIntersectContext {
     sys::RTCIntersectContext {
         flags: sys::RTCIntersectContextFlags::COHERENT,
         ..context()
+    }
+}
+
+/// A hit record that says nothing was hit, as Embree expects it before a closest-hit call.
+fn no_hit() -> sys::RTCHit {
+    sys::RTCHit {
+        Ng_x: 0.0,
+        Ng_y: 0.0,
+        Ng_z: 0.0,
+        u: 0.0,
+        v: 0.0,
+        primID: INVALID_ID,
+        geomID: INVALID_ID,
+        instID: [INVALID_ID],
     }
 }
 

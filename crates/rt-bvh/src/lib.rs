@@ -307,11 +307,12 @@ impl BvhParams {
     /// The wide layout with binned SAH: 32 buckets, costs 0.7 and 1, leaves of up to 8
     /// triangles.
     // PERF: 32 buckets and a traversal cost of 0.7, against 16 and 1.0 (private harness, one
-    // thread, 1024×768, medians of three alternating runs, Mrays/s). Bundles of 8×8 tiles,
-    // primary rays of close views: the teapot in a stadium 53.4 -> 59.5, the bunny 44.8 ->
-    // 49.9, the teapot 52.9 -> 61.7, the sphereflake 34.4 -> 37.2, and meshes not tuned on:
-    // rocker arm 39.9 -> 48.0, homer 43.9 -> 49.8, fandisk 48.0 -> 52.7, woody 52.0 -> 59.5,
-    // cow 49.2 -> 54.5; their shadow rays +4 to +17%; single rays of every kind within -3% and
+    // thread, 1024×768, medians of three alternating runs, Mrays/s, with each view's share of
+    // primary rays that hit). Bundles of 8×8 tiles, primary rays of close views: the teapot in
+    // a stadium (100%) 53.4 -> 59.5, the bunny (79.5%) 44.8 -> 49.9, the teapot (97.5%) 52.9
+    // -> 61.7, the sphereflake (94.2%) 34.4 -> 37.2, and meshes not tuned on: rocker arm
+    // (100%) 39.9 -> 48.0, homer (70.6%) 43.9 -> 49.8, fandisk (100%) 48.0 -> 52.7, woody
+    // (86.9%) 52.0 -> 59.5, cow (91.3%) 49.2 -> 54.5; their shadow rays +4 to +17%; single rays of every kind within -3% and
     // +15% (the stadium's shadow rays); incoherent rays within ±2%. The build takes up to 10%
     // longer and the tree up to 12% more memory (deeper trees). Costs of 0.4 to 0.85 traced
     // alike; 32 buckets alone helped the stadium most (a teapot among large triangles).

@@ -671,9 +671,9 @@ impl<S: Stats> LeafWalk for OneRayInto<'_, S> {
 }
 
 /// One bundle through [`bundle::wide_bundle`].
-struct OneBundle<'a, S, const ANY: bool>(&'a Bundle, &'a mut Lanes, &'a mut S);
+struct OneBundle<'a, 'b, S, const ANY: bool>(&'a Bundle, &'a mut Lanes<'b>, &'a mut S);
 
-impl<S: Stats, const ANY: bool> LeafWalk for OneBundle<'_, S, ANY> {
+impl<S: Stats, const ANY: bool> LeafWalk for OneBundle<'_, '_, S, ANY> {
     type Out = ();
     #[inline(always)]
     fn walk<L: traverse::Leaves>(self, nodes: &[WideNode], isa: Isa, leaves: &L) {

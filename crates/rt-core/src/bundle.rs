@@ -764,59 +764,17 @@ pub enum Route {
 /// A run of [`BUNDLE_LANES`] rays none of whose bundles walked is followed by a few runs traced
 /// singly without sorting them into bundles, so rays in random directions pay for the sorting
 /// on a few runs only.
-pub fn walk_groups<S: Stats, const ANY: bool>(
-    rays: &[Ray],
-    slots: usize,
-    stats: &mut S,
-    single: impl FnMut(&Ray, &mut S) -> Option<Hit>,
-    route: impl Fn(&Bundle) -> Route,
-    walk: impl FnMut(&Bundle, &mut Lanes, &mut S) -> u64,
-    answer: impl FnMut(usize, Option<Hit>),
-) {
-    walk_groups_with::<S, Lanes, ANY>(rays, slots, stats, single, route, walk, answer);
-}
-
-/// What a bundle walk records for each lane: its closest hit (for an any-hit query, `Some`
-/// when it is blocked). [`Lanes`] is one; a structure that keeps its lanes' answers its own way
-/// implements it to use [`walk_groups_with`], which makes one per call and resets it for each
-/// bundle (so nothing of its size is made or moved per bundle).
-pub trait LaneAnswers {
-    /// Answers for no bundle yet, to be [`reset`](LaneAnswers::reset) before each.
-    fn blank() -> Self;
-    /// Makes ready for bundle `b`: no lane hit yet.
-    fn reset(&mut self, b: &Bundle);
-    /// Lane `i`'s answer.
-    fn answer(&self, i: usize) -> Option<Hit>;
-}
-
-impl LaneAnswers for Lanes {
-    #[inline(always)]
-    fn blank() -> Self {
-        Lanes::blank(Isa::detect())
-    }
-    #[inline(always)]
-    fn reset(&mut self, b: &Bundle) {
-        Lanes::reset(self, b);
-    }
-    #[inline(always)]
-    fn answer(&self, i: usize) -> Option<Hit> {
-        self.hit(i)
-    }
-}
-
-/// [`walk_groups`] for a walk that keeps its lanes' answers in a type of its own: `walk(b,
-/// answers, stats)` records them in `answers` (reset for `b`) and returns the lanes it leaves
-/// to single rays.
 ///
 /// The whole loop runs compiled for the CPU's best vector instructions ([`Isa::run`]), and with
-/// it the walks and the kernels it inlines.
-pub fn walk_groups_with<S: Stats, A: LaneAnswers, const ANY: bool>(
+/// it the walks and the kernels it inlines. Each bundle that walks gets [`Lanes`] of its own,
+/// which borrow its rays and hold only the lanes' best hits.
+pub fn walk_groups<S: Stats, const ANY: bool>(
     rays: &[Ray],
     slots: usize,
     stats: &mut S,
     mut single: impl FnMut(&Ray, &mut S) -> Option<Hit>,
     route: impl Fn(&Bundle) -> Route,
-    walk: impl FnMut(&Bundle, &mut A, &mut S) -> u64,
+    walk: impl FnMut(&Bundle, &mut Lanes, &mut S) -> u64,
     mut answer: impl FnMut(usize, Option<Hit>),
 ) {
     let rays = &rays[..rays.len().min(slots)];
@@ -830,7 +788,7 @@ pub fn walk_groups_with<S: Stats, A: LaneAnswers, const ANY: bool>(
     let isa = Isa::detect();
     isa.run(
         #[inline(always)]
-        move || walk_runs::<S, A, ANY>(isa, rays, stats, single, route, walk, answer),
+        move || walk_runs::<S, ANY>(isa, rays, stats, single, route, walk, answer),
     );
 }
 
@@ -845,19 +803,17 @@ fn alone<S: Stats>(
     single(ray, stats)
 }
 
-/// The body of [`walk_groups_with`], for two rays or more.
+/// The body of [`walk_groups`], for two rays or more.
 #[inline(always)]
-fn walk_runs<S: Stats, A: LaneAnswers, const ANY: bool>(
+fn walk_runs<S: Stats, const ANY: bool>(
     isa: Isa,
     rays: &[Ray],
     stats: &mut S,
     mut single: impl FnMut(&Ray, &mut S) -> Option<Hit>,
     route: impl Fn(&Bundle) -> Route,
-    mut walk: impl FnMut(&Bundle, &mut A, &mut S) -> u64,
+    mut walk: impl FnMut(&Bundle, &mut Lanes, &mut S) -> u64,
     mut answer: impl FnMut(usize, Option<Hit>),
 ) {
-    // Made at the first bundle that walks (rays that all go singly never pay for it), and
-    // reset in place for each bundle.
     // PERF: everything around a bundle walk (this loop with a walk that does nothing, bunny
     // primary rays of the filled view in 8×8 tiles, one thread) took 19.5 ns a ray when each
     // bundle made and moved its own `Lanes`, each ray was tested before it was written into a
@@ -866,8 +822,8 @@ fn walk_runs<S: Stats, A: LaneAnswers, const ANY: bool>(
     // (medians of 3 alternating passes): wide BVH 2.01 1.70 1.63 1.84 -> 2.51 1.99 1.89 1.99,
     // binary BVH 2.56 2.33 3.06 3.31 -> 3.09 2.71 3.88 3.52, kd-tree 2.09 1.90 2.38 2.26 ->
     // 2.23 2.19 2.89 2.71, octree 4.22 3.95 5.54 5.52 -> 4.59 4.42 6.48 6.17, the grids within
-    // ±5%.
-    let mut answers: Option<A> = None;
+    // ±5%. (`Lanes` then held copies of the bundle's rays; now they borrow them, and each
+    // bundle's are made in place: see `Lanes::with_isa`.)
     // PERF: after a run of rays none of whose bundles walked, the next runs are traced singly
     // without sorting them into bundles: one after the first such run, doubling with each
     // further one up to `SKIP`, and back to none when a run walks. Rays in random directions
@@ -917,16 +873,15 @@ fn walk_runs<S: Stats, A: LaneAnswers, const ANY: bool>(
                 Group::Bundle(b) => match if b.len() > 1 { route(b) } else { Route::Singly } {
                     Route::Walk => {
                         walked = true;
-                        let answers = answers.get_or_insert_with(A::blank);
-                        answers.reset(b);
-                        let left = walk(b, answers, stats);
+                        let mut lanes = Lanes::with_isa(b, isa);
+                        let left = walk(b, &mut lanes, stats);
                         for i in 0..b.len() {
                             crate::simd::prefetch_line(ahead, i);
                             let slot = b.slot[i] as usize;
                             if left >> i & 1 != 0 {
                                 answer(slot, alone(&mut single, &rays[slot], stats));
                             } else {
-                                let hit = answers.answer(i);
+                                let hit = lanes.hit(i);
                                 answer(
                                     slot,
                                     if ANY {

@@ -30,23 +30,14 @@ pub(crate) const W: usize = 8;
 /// Steps of [`W`] lanes in a bundle.
 const STEPS: usize = BUNDLE_LANES / W;
 
-/// The lanes of one [`Bundle`] with each lane's watertight shear and best hit so far.
+/// The lanes of one [`Bundle`] with each lane's best hit so far. The lanes' rays (and their
+/// watertight shears) stay in the bundle, which this borrows.
 #[derive(Clone, Debug)]
-pub struct Lanes {
-    /// `sx`, `sy`, `sz` of each lane's [`Shear`].
-    shear: [[[f32; W]; STEPS]; 3],
-    /// The bundle's origins, per axis and step.
-    origin: [[[f32; W]; STEPS]; 3],
-    /// The bundle's directions and their reciprocals, per axis and step, for [`Lanes::ray`].
-    dir: [[[f32; W]; STEPS]; 3],
-    inv_dir: [[[f32; W]; STEPS]; 3],
-    /// `t_min` and the ray's own `t_max` per lane.
-    t_min: [[f32; W]; STEPS],
-    t_max: [[f32; W]; STEPS],
-    /// The lanes whose dominant axis ([`Shear::kz`]) is `a`, for each axis `a`.
-    by_axis: [u64; 3],
-    /// The axis order `[kx, ky, kz]` of the lanes whose dominant axis is `a` (the bundle's one
-    /// octant fixes `kx` and `ky` given `kz`).
+pub struct Lanes<'b> {
+    /// The bundle whose lanes these are.
+    bundle: &'b Bundle,
+    /// The axis order `[kx, ky, kz]` of the lanes whose dominant axis is `a`, for each axis `a`
+    /// (the bundle's one octant fixes `kx` and `ky` given `kz`).
     order: [[usize; 3]; 3],
     /// The best hit of each lane: its `t` (the lane's `t_max` while it has none)...
     t: [[f32; W]; STEPS],
@@ -58,98 +49,64 @@ pub struct Lanes {
     isa: crate::simd::Isa,
 }
 
-impl Lanes {
+/// Lanes `8 * step ..` of a bundle's array.
+#[inline(always)]
+fn step8(v: &[f32; BUNDLE_LANES], step: usize) -> &[f32; W] {
+    &v.as_chunks::<W>().0[step]
+}
+
+/// Lanes `16 * pair ..` of a bundle's array.
+#[cfg(target_arch = "x86_64")]
+#[inline(always)]
+fn pair16(v: &[f32; BUNDLE_LANES], pair: usize) -> &[f32; 16] {
+    &v.as_chunks::<16>().0[pair]
+}
+
+impl<'b> Lanes<'b> {
     /// The lanes of `bundle`, none hit yet: each lane's best `t` is its `t_max`. The kernels
     /// use the best instructions this CPU has ([`Isa::detect`](crate::bundle::Isa::detect)).
-    pub fn new(bundle: &Bundle) -> Self {
+    pub fn new(bundle: &'b Bundle) -> Self {
         Self::with_isa(bundle, crate::simd::Isa::detect())
     }
 
     /// [`Lanes::new`] with the kernels' instruction set chosen by the caller (the tests run
-    /// each one); an instruction set this CPU lacks falls back to the portable kernels.
-    pub fn with_isa(bundle: &Bundle, isa: crate::simd::Isa) -> Self {
-        let mut lanes = Self::blank(isa);
-        lanes.reset(bundle);
-        lanes
-    }
-
-    /// Lanes of no bundle yet, for [`Lanes::reset`], with the kernels of `isa` (the portable
-    /// ones if this CPU lacks it).
-    pub fn blank(isa: crate::simd::Isa) -> Self {
+    /// each one); an instruction set this CPU lacks falls back to the portable kernels. Lanes
+    /// past the bundle's length keep NaN as their best `t` and no primitive.
+    // PERF: the lanes once kept copies of the bundle's rays and shears, copied in for each
+    // bundle (4 KB a bundle); borrowing the bundle leaves 1 KB of best hits to set. The frame
+    // around a bundle walk (a walk that does nothing, the teapot's close view) went from
+    // 5.2-6.0 to 4.9 ns a ray. The wide BVH's bundles, the peers benchmark's close views, one
+    // thread, medians of five alternating runs of a private harness, Mrays/s: the bunny 40.3
+    // -> 41.6, the teapot 53.8 -> 61.5, the teapot in a stadium 62.1 -> 68.0, the sphereflake
+    // 35.6 -> 36.7.
+    #[inline(always)]
+    pub fn with_isa(bundle: &'b Bundle, isa: crate::simd::Isa) -> Self {
         let isa = if isa.available() {
             isa
         } else {
             crate::simd::Isa::Portable
         };
+        let mut t = [[f32::NAN; W]; STEPS];
+        let flat: &mut [f32; BUNDLE_LANES] = t
+            .as_flattened_mut()
+            .try_into()
+            .expect("STEPS vectors of W lanes");
+        *flat = bundle.t_max;
+        flat[bundle.len()..].fill(f32::NAN);
         Self {
-            shear: [[[0.0; W]; STEPS]; 3],
-            origin: [[[0.0; W]; STEPS]; 3],
-            dir: [[[0.0; W]; STEPS]; 3],
-            inv_dir: [[[0.0; W]; STEPS]; 3],
-            t_min: [[0.0; W]; STEPS],
-            t_max: [[0.0; W]; STEPS],
-            by_axis: [0; 3],
-            order: [[0, 1, 2], [2, 0, 1], [1, 2, 0]],
-            t: [[f32::NAN; W]; STEPS],
+            bundle,
+            order: crate::bundle::shear_orders(bundle.octant()),
+            t,
             prim: [[u32::MAX; W]; STEPS],
             uv: [[[0.0; W]; STEPS]; 2],
             isa,
         }
     }
 
-    /// Makes these the lanes of `bundle`, none hit yet, in place (a walk over many bundles
-    /// keeps one `Lanes`). Lanes past the bundle's length keep NaN as their best `t` and no
-    /// primitive; the other arrays past it are never read for an answer.
-    ///
-    /// Each lane's shear is the one the bundle made ([`Shear::new`] of its direction, bit for
-    /// bit).
-    // PERF: made lane by lane (each ray gathered back from the bundle, its shear made alone,
-    // the whole ray kept for the scalar fallbacks) and moved out by value for every bundle,
-    // this was a third of the time around a bundle walk; see `walk_groups_with` for the
-    // figures.
-    #[inline(always)]
-    pub fn reset(&mut self, bundle: &Bundle) {
-        // Whole arrays, of a size the compiler copies inline; the lanes past the bundle's
-        // length are never read for an answer.
-        // PERF: copied to the bundle's length, each array went through a call to `memmove`:
-        // 12% of the samples of a profile of the frame around a bundle walk (`walk_groups`
-        // with a walk that does nothing, the teapot in a stadium), none now; the frame's time
-        // moved within its noise (5.7 -> 5.5 ns a ray).
-        fn flat<T>(v: &mut [[T; W]; STEPS]) -> &mut [T; BUNDLE_LANES] {
-            v.as_flattened_mut()
-                .try_into()
-                .expect("STEPS vectors of W lanes")
-        }
-        for a in 0..3 {
-            *flat(&mut self.origin[a]) = bundle.origin[a];
-            *flat(&mut self.dir[a]) = bundle.dir[a];
-            *flat(&mut self.inv_dir[a]) = bundle.inv_dir[a];
-            *flat(&mut self.shear[a]) = bundle.shear[a];
-        }
-        *flat(&mut self.t_min) = bundle.t_min;
-        *flat(&mut self.t_max) = bundle.t_max;
-        let t = flat(&mut self.t);
-        *t = bundle.t_max;
-        t[bundle.len()..].fill(f32::NAN);
-        *flat(&mut self.prim) = [u32::MAX; BUNDLE_LANES];
-        self.by_axis = bundle.by_axis;
-        self.order = crate::bundle::shear_orders(bundle.octant());
-    }
-
     /// Lane `i` as a ray: the same bits as the ray it came from.
     #[inline]
     pub fn ray(&self, i: usize) -> Ray {
-        let (step, j) = (i / W, i % W);
-        let v = |a: &[[[f32; W]; STEPS]; 3]| {
-            glam::Vec3::new(a[0][step][j], a[1][step][j], a[2][step][j])
-        };
-        Ray::from_parts(
-            v(&self.origin),
-            v(&self.dir),
-            v(&self.inv_dir),
-            self.t_min[step][j],
-            self.t_max[step][j],
-        )
+        self.bundle.ray(i)
     }
 
     /// Lane `i`'s best `t` so far (its `t_max` while it has no hit).
@@ -222,10 +179,10 @@ impl Lanes {
     /// Lane `i`'s watertight [`Shear`], the one [`Shear::new`] makes of its direction.
     #[inline(always)]
     pub fn shear(&self, i: usize) -> Shear {
-        let (step, j) = (i / W, i % W);
-        let kz = if self.by_axis[0] >> i & 1 != 0 {
+        let by_axis = self.bundle.by_axis;
+        let kz = if by_axis[0] >> i & 1 != 0 {
             0
-        } else if self.by_axis[1] >> i & 1 != 0 {
+        } else if by_axis[1] >> i & 1 != 0 {
             1
         } else {
             2
@@ -235,9 +192,9 @@ impl Lanes {
             kx,
             ky,
             kz,
-            sx: self.shear[0][step][j],
-            sy: self.shear[1][step][j],
-            sz: self.shear[2][step][j],
+            sx: self.bundle.shear[0][i],
+            sy: self.bundle.shear[1][i],
+            sz: self.bundle.shear[2][i],
         }
     }
 
@@ -371,7 +328,7 @@ impl Lanes {
                 continue;
             }
             for axis in 0..3 {
-                let m = in_step & (self.by_axis[axis] >> (step * W)) as u8;
+                let m = in_step & (self.bundle.by_axis[axis] >> (step * W)) as u8;
                 if m != 0 {
                     let h = self.watertight_step::<ANY>(tri, id, step, self.order[axis], m);
                     hit |= u64::from(h) << (step * W);
@@ -400,7 +357,7 @@ impl Lanes {
                 continue;
             }
             for axis in 0..3 {
-                let m = in_pair & (self.by_axis[axis] >> base) as u16;
+                let m = in_pair & (self.bundle.by_axis[axis] >> base) as u16;
                 if m != 0 {
                     let h = self.watertight16::<ANY>(tri, id, pair, self.order[axis], m);
                     hit |= u64::from(h) << base;
@@ -434,16 +391,16 @@ impl Lanes {
         let [kx, ky, kz] = k;
         let input = Step8 {
             origin: [
-                &self.origin[kx][step],
-                &self.origin[ky][step],
-                &self.origin[kz][step],
+                step8(&self.bundle.origin[kx], step),
+                step8(&self.bundle.origin[ky], step),
+                step8(&self.bundle.origin[kz], step),
             ],
             shear: [
-                &self.shear[0][step],
-                &self.shear[1][step],
-                &self.shear[2][step],
+                step8(&self.bundle.shear[0], step),
+                step8(&self.bundle.shear[1], step),
+                step8(&self.bundle.shear[2], step),
             ],
-            t_min: &self.t_min[step],
+            t_min: step8(&self.bundle.t_min, step),
             t_max: &self.t[step],
             active: m,
         };
@@ -473,16 +430,16 @@ impl Lanes {
         }
         let input = Step16 {
             origin: [
-                at(&self.origin[kx], pair),
-                at(&self.origin[ky], pair),
-                at(&self.origin[kz], pair),
+                pair16(&self.bundle.origin[kx], pair),
+                pair16(&self.bundle.origin[ky], pair),
+                pair16(&self.bundle.origin[kz], pair),
             ],
             shear: [
-                at(&self.shear[0], pair),
-                at(&self.shear[1], pair),
-                at(&self.shear[2], pair),
+                pair16(&self.bundle.shear[0], pair),
+                pair16(&self.bundle.shear[1], pair),
+                pair16(&self.bundle.shear[2], pair),
             ],
-            t_min: at(&self.t_min, pair),
+            t_min: pair16(&self.bundle.t_min, pair),
             t_max: at(&self.t, pair),
             active: m,
         };

@@ -420,17 +420,16 @@ impl Bundle {
     #[inline]
     pub fn slope_bounds(&self, major: usize) -> [(f32, f32); 2] {
         let (lo, hi) = (self.inv_lo.to_array(), self.inv_hi.to_array());
+        // Four quotients per axis in one vector division each (the same quotients; the bounds
+        // are finite and non-zero, so none is NaN and the extremes are those of a fold).
+        // PERF: eight scalar divisions were 2% of a profile of the wide BVH's bundles; with
+        // these, its close views (private harness, one thread, medians of five alternating
+        // runs, Mrays/s) went: the sphereflake 38.6 -> 39.0, the bunny 42.6 -> 43.0, the teapot
+        // 62.9 -> 62.8, the teapot in a stadium 69.5 -> 70.1.
         [(major + 1) % 3, (major + 2) % 3].map(|a| {
-            let r = [
-                lo[major] / lo[a],
-                lo[major] / hi[a],
-                hi[major] / lo[a],
-                hi[major] / hi[a],
-            ];
-            r.iter()
-                .fold((f32::INFINITY, f32::NEG_INFINITY), |(x, y), &v| {
-                    (x.min(v), y.max(v))
-                })
+            let r = glam::Vec4::new(lo[major], lo[major], hi[major], hi[major])
+                / glam::Vec4::new(lo[a], hi[a], lo[a], hi[a]);
+            (r.min_element(), r.max_element())
         })
     }
 

@@ -50,11 +50,18 @@ pub(crate) const MAX_SPREAD: f32 = 1.0;
 const GROUPS: usize = BUNDLE_LANES / 8;
 
 /// The interval test of all eight children against the bundle: a bit mask of the children some
-/// lane may enter, and a lower bound of every lane's entry distance into each. Lane by lane of
+/// lane may enter, and a lower bound of every lane's entry distance into each. `one_origin`:
+/// whether all lanes start from one point, which halves the products. Lane by lane of
 /// the children, this is [`Bundle::may_enter`] (the same operations; see there why it is
 /// conservative).
 #[inline(always)]
-fn interval8<X: Simd>(s: X, node: &WideNode, b: &Bundle, t_hi: f32) -> (u32, [f32; WIDTH]) {
+fn interval8<X: Simd>(
+    s: X,
+    node: &WideNode,
+    b: &Bundle,
+    t_hi: f32,
+    one_origin: bool,
+) -> (u32, [f32; WIDTH]) {
     let lb = b.lane_bounds();
     let mut t0 = s.splat8(lb.t_min_lo);
     let mut t1 = s.splat8(t_hi);
@@ -65,6 +72,18 @@ fn interval8<X: Simd>(s: X, node: &WideNode, b: &Bundle, t_hi: f32) -> (u32, [f3
         let (o_lo, o_hi) = (s.splat8(lb.origin_lo[a]), s.splat8(lb.origin_hi[a]));
         let near = s.load8(&node.bounds[near]);
         let far = s.load8(&node.bounds[far]);
+        if one_origin {
+            // The lanes' origins are one point, so `near - o_lo` and `near - o_hi` are the
+            // same numbers and half the products below repeat: the same bounds.
+            // PERF: close views, private harness, one thread, medians of five alternating
+            // runs, Mrays/s: the sphereflake 38.0 -> 38.2, the bunny 42.2 -> 42.2, the teapot
+            // 62.4 -> 63.0, the teapot in a stadium 68.8 -> 70.7.
+            let n = s.sub8(near, o_lo);
+            let f = s.sub8(far, o_lo);
+            t0 = s.max8(s.min8(s.mul8(n, lo), s.mul8(n, hi)), t0);
+            t1 = s.min8(s.max8(s.mul8(f, lo), s.mul8(f, hi)), t1);
+            continue;
+        }
         let (n0, n1) = (s.sub8(near, o_hi), s.sub8(near, o_lo));
         let near_lo = s.min8(
             s.min8(s.mul8(n0, lo), s.mul8(n0, hi)),
@@ -174,7 +193,7 @@ pub(crate) fn wide_bundle<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
         stats.bundle_lanes(b.len() as u32, active.count_ones());
         if !current.is_leaf() {
             let node = &nodes[current.index()];
-            let (children, t_entry) = interval8(simd, node, b, t_hi);
+            let (children, t_entry) = interval8(simd, node, b, t_hi, one_origin);
             // The children whose lanes are found exactly, each lane by its own slab test: all
             // of them, or with one origin only the leaves. The others take every active lane,
             // a superset of those that enter (which is all exactness needs), narrowed at the

@@ -786,6 +786,18 @@ mod tests {
                 Vec3::new(2.0, 0.0, 1.0),
                 Vec3::new(0.0, 2.0, 1.0),
             ),
+            // Edge functions that overflow to infinities and NaN, and ones all zero.
+            Triangle::new(
+                Vec3::splat(3e38),
+                Vec3::new(-3e38, 3e38, 0.0),
+                Vec3::new(0.0, -3e38, 3e38),
+            ),
+            Triangle::new(
+                Vec3::new(1e20, 0.0, 0.0),
+                Vec3::new(0.0, 1e20, 0.0),
+                Vec3::new(0.0, 0.0, 1e20),
+            ),
+            Triangle::new(Vec3::ONE, Vec3::ONE, Vec3::ONE),
         ];
         for _ in 0..40 {
             let c = rng.in_box(Vec3::splat(-2.0), Vec3::splat(2.0));

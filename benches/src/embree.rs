@@ -177,25 +177,33 @@ macro_rules! packet_calls {
         #[repr(C, align($align))]
         struct $valid([i32; $n]);
 
+        impl $valid {
+            /// Writes `rays` (at most a packet's worth) into the packet's lanes and returns the
+            /// mask of those lanes.
+            fn fill(rays: &[Ray], p: &mut sys::$ray) -> Self {
+                let mut valid = $valid([0; $n]);
+                for (i, r) in rays.iter().enumerate().take($n) {
+                    valid.0[i] = -1;
+                    (p.org_x[i], p.org_y[i], p.org_z[i]) = (r.origin.x, r.origin.y, r.origin.z);
+                    (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (r.dir().x, r.dir().y, r.dir().z);
+                    (p.tnear[i], p.tfar[i], p.mask[i]) = (r.t_min, r.t_max, u32::MAX);
+                }
+                valid
+            }
+        }
+
         impl EmbreeScene {
             #[doc = concat!("The closest hits of `rays` into `out`, ", stringify!($n),
                         " rays per `", stringify!($intersect), "` call with the coherent flag.")]
             pub fn $closest(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
                 for (rays, out) in rays.chunks($n).zip(out.chunks_mut($n)) {
                     let n = rays.len().min(out.len());
-                    let mut valid = $valid([0; $n]);
                     // SAFETY: the packet is plain old data (arrays of f32 and u32), for which
                     // all zero bytes are a valid value.
                     let mut packet: sys::$rayhit = unsafe { std::mem::zeroed() };
-                    for (i, r) in rays[..n].iter().enumerate() {
-                        valid.0[i] = -1;
-                        let p = &mut packet.ray;
-                        (p.org_x[i], p.org_y[i], p.org_z[i]) = (r.origin.x, r.origin.y, r.origin.z);
-                        (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (r.dir().x, r.dir().y, r.dir().z);
-                        (p.tnear[i], p.tfar[i], p.mask[i]) = (r.t_min, r.t_max, u32::MAX);
-                        packet.hit.geomID[i] = INVALID_ID;
-                        packet.hit.primID[i] = INVALID_ID;
-                    }
+                    let valid = $valid::fill(&rays[..n], &mut packet.ray);
+                    packet.hit.geomID[..n].fill(INVALID_ID);
+                    packet.hit.primID[..n].fill(INVALID_ID);
                     let mut context = coherent_context();
                     // SAFETY: a committed scene alive until `Drop`; `valid` and `packet` are
                     // locals aligned as Embree's packet loads require (the mask by its type,
@@ -220,15 +228,9 @@ macro_rules! packet_calls {
             pub fn $any(&self, rays: &[Ray], out: &mut [bool]) {
                 for (rays, out) in rays.chunks($n).zip(out.chunks_mut($n)) {
                     let n = rays.len().min(out.len());
-                    let mut valid = $valid([0; $n]);
                     // SAFETY: as in the closest-hit call: plain old data, all zeros valid.
                     let mut p: sys::$ray = unsafe { std::mem::zeroed() };
-                    for (i, r) in rays[..n].iter().enumerate() {
-                        valid.0[i] = -1;
-                        (p.org_x[i], p.org_y[i], p.org_z[i]) = (r.origin.x, r.origin.y, r.origin.z);
-                        (p.dir_x[i], p.dir_y[i], p.dir_z[i]) = (r.dir().x, r.dir().y, r.dir().z);
-                        (p.tnear[i], p.tfar[i], p.mask[i]) = (r.t_min, r.t_max, u32::MAX);
-                    }
+                    let valid = $valid::fill(&rays[..n], &mut p);
                     let mut context = coherent_context();
                     // SAFETY: as in the closest-hit call.
                     unsafe { sys::$occluded(valid.0.as_ptr(), self.scene, &mut context, &mut p) };

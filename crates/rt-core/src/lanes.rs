@@ -215,13 +215,13 @@ impl<'b> Lanes<'b> {
     /// Lane `i`'s answer: its closest hit, if any.
     #[inline(always)]
     pub fn hit(&self, i: usize) -> Option<Hit> {
-        let (step, j) = (i / W, i % W);
-        let prim = self.prim[step][j];
+        // Indexed in the flattened arrays: one scaled index per field.
+        let prim = self.prim.as_flattened()[i];
         (prim != u32::MAX).then_some(Hit {
             prim,
-            t: self.t[step][j],
-            u: self.uv[0][step][j],
-            v: self.uv[1][step][j],
+            t: self.t.as_flattened()[i],
+            u: self.uv[0].as_flattened()[i],
+            v: self.uv[1].as_flattened()[i],
         })
     }
 

@@ -112,6 +112,7 @@ fn lanes_entering<X: Simd>(
     b: &Bundle,
     t_max: &[f32; BUNDLE_LANES],
     active: u64,
+    one_origin: bool,
 ) -> [u64; WIDTH] {
     let mut lanes = [0u64; WIDTH];
     let octant = b.octant();
@@ -120,13 +121,41 @@ fn lanes_entering<X: Simd>(
         if negative { (a + 3, a) } else { (a, a + 3) }
     };
     let rows = [rows(0), rows(1), rows(2)];
+    // With one origin, each plane's distance from it is the same for every lane: taken once
+    // per node for all eight children, here, instead of in every vector of lanes. A lane whose
+    // origin is the other zero than `origin_lo`'s may get the other zero for a plane at zero,
+    // which changes no comparison below: the mask is the lanes' own.
+    // PERF: the filled views at half the distance (97.5%, 79.5%, 94.2% and 100% of the rays
+    // hit), primary rays in 8×8 tiles, one thread, medians of five alternating runs of a
+    // private harness, Mrays/s: the teapot 71.8 -> 74.5, the bunny 53.3 -> 54.6, the
+    // sphereflake 41.2 -> 42.4, the teapot in a stadium 75.6 -> 75.7.
+    let lb = b.lane_bounds();
+    let plane = |row: usize, a: usize| {
+        let d = s.sub8(s.load8(&node.bounds[row]), s.splat8(lb.origin_lo[a]));
+        s.store8(d)
+    };
+    let (near_d, far_d) = if one_origin {
+        (
+            [
+                plane(rows[0].0, 0),
+                plane(rows[1].0, 1),
+                plane(rows[2].0, 2),
+            ],
+            [
+                plane(rows[0].1, 0),
+                plane(rows[1].1, 1),
+                plane(rows[2].1, 2),
+            ],
+        )
+    } else {
+        ([[0.0; WIDTH]; 3], [[0.0; WIDTH]; 3])
+    };
     for g in 0..GROUPS {
         let group = (active >> (8 * g)) as u8;
         if group == 0 {
             continue;
         }
         let at = |v: &[f32; BUNDLE_LANES]| s.load8(&v.as_chunks::<8>().0[g]);
-        let o = [at(&b.origin[0]), at(&b.origin[1]), at(&b.origin[2])];
         let inv = [at(&b.inv_dir[0]), at(&b.inv_dir[1]), at(&b.inv_dir[2])];
         let (t_min, t_max) = (at(&b.t_min), at(t_max));
         let mut m = children;
@@ -136,9 +165,19 @@ fn lanes_entering<X: Simd>(
             let mut t0 = t_min;
             let mut t1 = t_max;
             for a in 0..3 {
-                let (near, far) = rows[a];
-                let tn = s.mul8(s.sub8(s.splat8(node.bounds[near][c]), o[a]), inv[a]);
-                let tf = s.mul8(s.sub8(s.splat8(node.bounds[far][c]), o[a]), inv[a]);
+                let (tn, tf) = if one_origin {
+                    (
+                        s.mul8(s.splat8(near_d[a][c]), inv[a]),
+                        s.mul8(s.splat8(far_d[a][c]), inv[a]),
+                    )
+                } else {
+                    let (near, far) = rows[a];
+                    let o = at(&b.origin[a]);
+                    (
+                        s.mul8(s.sub8(s.splat8(node.bounds[near][c]), o), inv[a]),
+                        s.mul8(s.sub8(s.splat8(node.bounds[far][c]), o), inv[a]),
+                    )
+                };
                 t0 = s.max8(tn, t0);
                 t1 = s.min8(tf, t1);
             }
@@ -204,7 +243,7 @@ pub(crate) fn wide_bundle<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
                 children
             };
             let mut entering = if exact != 0 {
-                lanes_entering(simd, node, exact, b, lanes.best_t(), active)
+                lanes_entering(simd, node, exact, b, lanes.best_t(), active, one_origin)
             } else {
                 [0; WIDTH]
             };

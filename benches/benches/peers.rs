@@ -4,7 +4,9 @@
 //! It prints the measurements and the ratio table (rt-bvh's default preset ÷ Embree, per scene
 //! and ray kind, with geometric means), so nobody divides by hand, and a table of rt-bvh's ray
 //! bundles against its single rays and Embree's coherent paths (16- and 8-ray packets, 64-ray
-//! streams), on the framing view and on a closer one, with each ray set's hit share.
+//! streams). Primary and shadow rays come from the view each scene fills (`compare`'s default),
+//! which the ratios judge, and again from the sparse view, where most rays of a compact mesh
+//! miss its box; every ray set's hit share is printed beside its speeds.
 //!
 //! ```sh
 //! cargo bench -p rt-benches --features embree --bench peers            # with Embree
@@ -25,6 +27,7 @@ use rt_benches::{BenchScene, peer_scenes};
 use rt_bvh::{Bvh, BvhParams};
 use rt_core::{Accel, Hit, MtTriangle, Ray, Triangle};
 use rt_scene::raygen::RayKind;
+use rt_scene::scenes::View;
 use std::fmt::Write as _;
 use std::time::Instant;
 
@@ -162,11 +165,26 @@ fn time_interleaved(fs: &[BuildFn<'_>], passes: usize) -> Vec<f64> {
     times.into_iter().map(median).collect()
 }
 
-/// Results of one scene and ray kind.
+/// The ray sets each scene is traced with: primary and shadow rays from the view the scene
+/// fills (`compare`'s default, `--view filled`), incoherent rays (no camera), and primary and
+/// shadow rays from the sparse view (`--view sparse`), where most rays of a compact mesh miss
+/// its box and leave after one test. The ratio tables judge rt-bvh on the first three.
+const SETS: [(&str, RayKind, View); 5] = [
+    ("primary", RayKind::Primary, View::Filled),
+    ("incoherent", RayKind::Incoherent, View::Filled),
+    ("shadow", RayKind::Shadow, View::Filled),
+    ("sparse primary", RayKind::Primary, View::Sparse),
+    ("sparse shadow", RayKind::Shadow, View::Sparse),
+];
+
+/// Results of one scene and ray set.
 struct TraceResult {
     scene: &'static str,
-    kind: RayKind,
+    /// The ray set's name in [`SETS`].
+    set: &'static str,
     rays: usize,
+    /// Share of the rays that hit (closest hit) or are blocked (any hit), by rt-bvh's answers.
+    hit_share: f64,
     /// Mrays/s per tracer, in tracer order.
     mrays: Vec<f64>,
     /// Rays on which each tracer's answer differs from rt-bvh's default preset.
@@ -337,8 +355,8 @@ fn tracers(scene: &BenchScene) -> Vec<Tracer> {
 }
 
 fn bench_traces(scene: &BenchScene, tracers: &[Tracer], o: &Options, out: &mut Vec<TraceResult>) {
-    for kind in RayKind::ALL {
-        let rays = scene.rays(kind, (o.width, o.height), |primary| {
+    for (set, kind, view) in SETS {
+        let rays = scene.rays(kind, view, (o.width, o.height), |primary| {
             primary
                 .iter()
                 .map(|r| (tracers[0].answer)(r, false))
@@ -349,6 +367,8 @@ fn bench_traces(scene: &BenchScene, tracers: &[Tracer], o: &Options, out: &mut V
         // rays are counted.
         let reference: Vec<Option<Hit>> =
             rays.iter().map(|r| (tracers[0].answer)(r, any)).collect();
+        let hit_share =
+            reference.iter().filter(|h| h.is_some()).count() as f64 / rays.len().max(1) as f64;
         let differs: Vec<usize> = tracers
             .iter()
             .map(|t| {
@@ -361,10 +381,9 @@ fn bench_traces(scene: &BenchScene, tracers: &[Tracer], o: &Options, out: &mut V
         for (t, &d) in tracers.iter().zip(&differs) {
             assert!(
                 !t.exact || d == 0,
-                "{} disagrees with {} on {d} {} rays of {}",
+                "{} disagrees with {} on {d} {set} rays of {}",
                 t.name,
                 tracers[0].name,
-                kind.name(),
                 scene.name
             );
         }
@@ -380,8 +399,9 @@ fn bench_traces(scene: &BenchScene, tracers: &[Tracer], o: &Options, out: &mut V
         let ms = time_interleaved(&fs, o.passes);
         out.push(TraceResult {
             scene: scene.name,
-            kind,
+            set,
             rays: rays.len(),
+            hit_share,
             mrays: ms.iter().map(|ms| rays.len() as f64 / ms / 1e3).collect(),
             differs,
         });
@@ -401,13 +421,18 @@ struct BundleResult {
     mrays: Vec<(&'static str, f64)>,
 }
 
-/// The views of the bundle comparison: the scene's camera as `compare` frames it, and the same
-/// camera at half the distance, where the mesh fills more of the image.
-fn views(scene: &BenchScene, o: &Options) -> [(&'static str, rt_scene::Camera); 2] {
-    let framing = scene.camera(o.width, o.height);
-    let mut close = framing;
+/// The views of the bundle comparison: the view the scene fills (`compare`'s default), the
+/// sparse view at half the distance ("close", where the mesh fills more of the image), and the
+/// sparse view itself.
+fn views(scene: &BenchScene, o: &Options) -> [(&'static str, rt_scene::Camera); 3] {
+    let sparse = scene.camera(View::Sparse, o.width, o.height);
+    let mut close = sparse;
     close.eye = close.target + 0.5 * (close.eye - close.target);
-    [("framing", framing), ("close", close)]
+    [
+        ("filled", scene.camera(View::Filled, o.width, o.height)),
+        ("close", close),
+        ("sparse", sparse),
+    ]
 }
 
 /// rt-bvh's bundles against its single rays and against Embree's packets, on primary rays in
@@ -669,11 +694,16 @@ fn report(names: &[String], traces: &[TraceResult], builds: &[BuildResult], o: &
     );
     let _ = writeln!(
         s,
-        "\nMrays/s (differing answers from `{}` in brackets, where any)\n",
+        "\nMrays/s (differing answers from `{}` in brackets, where any); hit: the share of the \
+         rays that hit (primary, incoherent) or are blocked (shadow)\n",
         names[0]
     );
-    let _ = writeln!(s, "| scene | rays | count | {} |", names.join(" | "));
-    let _ = writeln!(s, "| --- | --- | ---: |{}", " ---: |".repeat(names.len()));
+    let _ = writeln!(s, "| scene | rays | count | hit | {} |", names.join(" | "));
+    let _ = writeln!(
+        s,
+        "| --- | --- | ---: | ---: |{}",
+        " ---: |".repeat(names.len())
+    );
     for r in traces {
         let cells: Vec<String> = r
             .mrays
@@ -689,10 +719,11 @@ fn report(names: &[String], traces: &[TraceResult], builds: &[BuildResult], o: &
             .collect();
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} |",
+            "| {} | {} | {} | {:.1}% | {} |",
             r.scene,
-            r.kind.name(),
+            r.set,
             r.rays,
+            100.0 * r.hit_share,
             cells.join(" | ")
         );
     }
@@ -731,14 +762,14 @@ fn report(names: &[String], traces: &[TraceResult], builds: &[BuildResult], o: &
         s,
         "\nRatios, speed ÷ Embree medium's (its default build quality), single-threaded\n"
     );
-    let kinds = RayKind::ALL;
+    let sets = SETS.map(|(set, _, _)| set);
     let _ = writeln!(
         s,
         "| {} ÷ Embree | {} | build, 1 thread (Embree's time ÷ ours) |",
         names[0],
-        kinds.map(|k| k.name()).join(" | ")
+        sets.join(" | ")
     );
-    let _ = writeln!(s, "| --- |{}", " ---: |".repeat(kinds.len() + 1));
+    let _ = writeln!(s, "| --- |{}", " ---: |".repeat(sets.len() + 1));
     let ratio = |r: &TraceResult, i: usize| r.mrays[i] / r.mrays[base];
     let scenes: Vec<&'static str> = builds.iter().map(|b| b.scene).collect();
     let build_ratio = |b: &BuildResult| {
@@ -751,12 +782,12 @@ fn report(names: &[String], traces: &[TraceResult], builds: &[BuildResult], o: &
         embree / ours
     };
     for (si, scene) in scenes.iter().enumerate() {
-        let cells: Vec<String> = kinds
+        let cells: Vec<String> = sets
             .iter()
-            .map(|k| {
+            .map(|set| {
                 traces
                     .iter()
-                    .find(|r| r.scene == *scene && r.kind == *k)
+                    .find(|r| r.scene == *scene && r.set == *set)
                     .map_or("-".into(), |r| format!("{:.2}", ratio(r, 0)))
             })
             .collect();
@@ -768,10 +799,10 @@ fn report(names: &[String], traces: &[TraceResult], builds: &[BuildResult], o: &
             build_ratio(&builds[si])
         );
     }
-    let gm = |i: usize, k: RayKind| {
+    let gm = |i: usize, set: &str| {
         let v: Vec<f64> = traces
             .iter()
-            .filter(|r| r.kind == k)
+            .filter(|r| r.set == set)
             .map(|r| ratio(r, i))
             .collect();
         geomean(&v)
@@ -780,21 +811,21 @@ fn report(names: &[String], traces: &[TraceResult], builds: &[BuildResult], o: &
     let _ = writeln!(
         s,
         "| **geometric mean** | {} | {:.2} |",
-        kinds.map(|k| format!("**{:.2}**", gm(0, k))).join(" | "),
+        sets.map(|set| format!("**{:.2}**", gm(0, set))).join(" | "),
         build_gm
     );
     let _ = writeln!(
         s,
         "\nGeometric means over the scenes, each contender ÷ Embree medium\n"
     );
-    let _ = writeln!(s, "| contender | {} |", kinds.map(|k| k.name()).join(" | "));
-    let _ = writeln!(s, "| --- |{}", " ---: |".repeat(kinds.len()));
+    let _ = writeln!(s, "| contender | {} |", sets.join(" | "));
+    let _ = writeln!(s, "| --- |{}", " ---: |".repeat(sets.len()));
     for (i, n) in names.iter().enumerate() {
         let _ = writeln!(
             s,
             "| {} | {} |",
             n,
-            kinds.map(|k| format!("{:.2}", gm(i, k))).join(" | ")
+            sets.map(|set| format!("{:.2}", gm(i, set))).join(" | ")
         );
     }
     s
@@ -810,7 +841,7 @@ fn to_json(
         .iter()
         .map(|r| {
             serde_json::json!({
-                "scene": r.scene, "rays": r.kind.name(), "count": r.rays,
+                "scene": r.scene, "rays": r.set, "count": r.rays, "hit_share": r.hit_share,
                 "mrays_per_s": r.mrays, "differing": r.differs,
             })
         })

@@ -7,7 +7,7 @@ use rt_conformance::shared_meshes_dir;
 use rt_core::{Aabb, Hit, Primitive, Ray, Triangle};
 use rt_scene::Camera;
 use rt_scene::raygen::{self, RayKind};
-use rt_scene::scenes;
+use rt_scene::scenes::{self, View};
 
 /// A named triangle scene.
 #[derive(Debug)]
@@ -30,28 +30,32 @@ impl BenchScene {
             .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()))
     }
 
-    /// The scene's camera for a `width × height` image, as `compare` chooses it.
-    pub fn camera(&self, width: u32, height: u32) -> Camera {
-        scenes::camera_for(&self.spec, &self.bounds(), width, height)
+    /// The scene's camera of `view` for a `width × height` image, as `compare --view` makes it.
+    pub fn camera(&self, view: View, width: u32, height: u32) -> Camera {
+        scenes::camera_for_view(&self.spec, &self.bounds(), width, height, view)
     }
 
-    /// Primary rays of the camera `compare` uses.
+    /// Primary rays of the view `compare` uses by default, one the scene fills
+    /// ([`View::Filled`]).
     pub fn primary_rays(&self, width: u32, height: u32) -> Vec<Ray> {
-        self.camera(width, height).primary_rays(width, height)
+        self.camera(View::Filled, width, height)
+            .primary_rays(width, height)
     }
 
-    /// The rays of one kind, exactly as `cargo xtask compare --rays KIND` makes them (seed 1);
-    /// `closest_hits` answers the primary rays that shadow rays start from.
+    /// The rays of one kind from `view`'s camera, exactly as `cargo xtask compare --rays KIND
+    /// --view VIEW` makes them (seed 1); `closest_hits` answers the primary rays that shadow
+    /// rays start from.
     pub fn rays(
         &self,
         kind: RayKind,
+        view: View,
         (width, height): (u32, u32),
         closest_hits: impl FnOnce(&[Ray]) -> Vec<Option<Hit>>,
     ) -> Vec<Ray> {
         raygen::rays_of_kind(
             kind,
             &self.triangles,
-            &self.camera(width, height),
+            &self.camera(view, width, height),
             &self.bounds(),
             (width, height),
             1,

@@ -654,10 +654,11 @@ fn embree() -> Result<String, String> {
     let (command, tables) = cargo_bench(&["--features", "embree", "--bench", "peers"])?;
     Ok(format!(
         "\n## rt-bvh against Embree 3\n\n`{command}`: rt-bvh's presets and Embree 3 on the same \
-         triangles and the same rays, traced on one thread, passes interleaved, medians. Its \
-         primary rays come from the scenes' own cameras, whose images these meshes do not fill \
-         (see the hit shares of the primary-ray tables above): for the many rays that leave the \
-         box early it times the cost of a call rather than of a traversal, so judge the \
-         primary-ray ratio with that in mind.\n\n{tables}"
+         triangles and the same rays, traced on one thread, passes interleaved, medians. \
+         Primary and shadow rays come from the view each scene fills (as `compare`'s default \
+         `--view filled`), and the ratios judge rt-bvh on those and on incoherent rays; the \
+         sparse rows repeat them from the sparse view (`--view sparse`), where most rays of a \
+         compact mesh leave its box after one test, which times the cost of a call more than \
+         a traversal. Each ray set's hit share stands beside its speeds.\n\n{tables}"
     ))
 }

@@ -143,8 +143,9 @@ pub const BUILTIN_SCENES: &[BuiltinScene] = &[
     },
 ];
 
-/// The camera `compare` and the benchmarks use for the scene `spec` (a built-in name or a file):
-/// a built-in scene's own viewpoint when it has one, else one framing `bounds`.
+/// The camera of the sparse view ([`View::Sparse`]) of the scene `spec` (a built-in name or a
+/// file): a built-in scene's own viewpoint when it has one, else one framing `bounds`, the
+/// whole box in the image. `render` draws from it; timings use [`camera_for_view`].
 pub fn camera_for(spec: &str, bounds: &Aabb, width: u32, height: u32) -> Camera {
     match find(spec) {
         Some(scene) => scene.camera(bounds, width, height),

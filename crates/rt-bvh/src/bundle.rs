@@ -156,6 +156,7 @@ fn lanes_entering<X: Simd>(
             continue;
         }
         let at = |v: &[f32; BUNDLE_LANES]| s.load8(&v.as_chunks::<8>().0[g]);
+        let o = [at(&b.origin[0]), at(&b.origin[1]), at(&b.origin[2])];
         let inv = [at(&b.inv_dir[0]), at(&b.inv_dir[1]), at(&b.inv_dir[2])];
         let (t_min, t_max) = (at(&b.t_min), at(t_max));
         let mut m = children;
@@ -172,10 +173,9 @@ fn lanes_entering<X: Simd>(
                     )
                 } else {
                     let (near, far) = rows[a];
-                    let o = at(&b.origin[a]);
                     (
-                        s.mul8(s.sub8(s.splat8(node.bounds[near][c]), o), inv[a]),
-                        s.mul8(s.sub8(s.splat8(node.bounds[far][c]), o), inv[a]),
+                        s.mul8(s.sub8(s.splat8(node.bounds[near][c]), o[a]), inv[a]),
+                        s.mul8(s.sub8(s.splat8(node.bounds[far][c]), o[a]), inv[a]),
                     )
                 };
                 t0 = s.max8(tn, t0);

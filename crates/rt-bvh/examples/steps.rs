@@ -9,7 +9,7 @@
 //!
 //! Scenes: the Stanford bunny and the Utah teapot (from `../shared/meshes`, when present), the
 //! sphereflake and the teapot in a stadium. Rays: primary, incoherent and shadow, as
-//! `cargo xtask compare` makes them. The passes of all configurations are interleaved and the
+//! `cargo xtask compare` makes them from the view each scene fills (its default `--view filled`). The passes of all configurations are interleaved and the
 //! median pass is reported; every configuration must answer exactly like the first.
 
 use rt_bvh::{Ablation, Bvh, BvhParams, Kernels};
@@ -127,7 +127,7 @@ fn main() {
             .iter()
             .filter(|t| t.is_valid())
             .fold(rt_core::Aabb::EMPTY, |b, t| b.union(t.bounds()));
-        let camera = scenes::camera_for(spec, &bounds, width, height);
+        let camera = scenes::camera_for_view(spec, &bounds, width, height, scenes::View::Filled);
         for (ki, kind) in RayKind::ALL.into_iter().enumerate() {
             let rays =
                 raygen::rays_of_kind(kind, tris, &camera, &bounds, (width, height), 1, |p| {

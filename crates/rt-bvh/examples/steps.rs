@@ -9,8 +9,9 @@
 //!
 //! Scenes: the Stanford bunny and the Utah teapot (from `../shared/meshes`, when present), the
 //! sphereflake and the teapot in a stadium. Rays: primary, incoherent and shadow, as
-//! `cargo xtask compare` makes them from the view each scene fills (its default `--view filled`). The passes of all configurations are interleaved and the
-//! median pass is reported; every configuration must answer exactly like the first.
+//! `cargo xtask compare` makes them from the view each scene fills (its default `--view
+//! filled`). The passes of all configurations are interleaved and the median pass is reported;
+//! every configuration must answer exactly like the first.
 
 use rt_bvh::{Ablation, Bvh, BvhParams, Kernels};
 use rt_core::{Accel, Hit, Primitive, Ray, Triangle};

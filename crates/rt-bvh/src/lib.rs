@@ -43,9 +43,9 @@
 //!   and there are O(log N) levels for balanced splits; sets whose remaining depth budget only
 //!   just fits a balanced tree are split by count, so the depth never exceeds [`MAX_DEPTH`] and
 //!   degenerate input costs O(N · MAX_DEPTH) at worst. Scratch memory: 32 bytes per primitive,
-//!   plus, in the parallel build, the subtrees built as tasks until they are appended (up to a
-//!   second copy of the tree), so a build's scratch stays below the finished tree plus its
-//!   input (`cargo xtask scale` measures it). With the `parallel` feature (default) large inputs
+//!   up to 512 KB per thread for partitioning, plus, in the parallel build, the subtrees built
+//!   as tasks until they are appended (up to a second copy of the tree), so a build's scratch
+//!   stays below the finished tree plus its input (`cargo xtask scale` measures it). With the `parallel` feature (default) large inputs
 //!   build on rayon's threads; the tree is the same, byte for byte, on any number of threads
 //!   and without the feature.
 //! - **Memory**: see the layouts above.

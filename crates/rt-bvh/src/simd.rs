@@ -222,6 +222,9 @@ mod x86 {
         op!(min8(a: __m256, b: __m256) -> __m256, _mm256_min_ps(a, b));
         op!(le_bits8(a: __m256, b: __m256) -> u32,
             _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(a, b)) as u32);
+        // `blendvps` takes its second operand where the mask's sign bit is set.
+        op!(select_sign8(sign: __m256, neg: __m256, pos: __m256) -> __m256,
+            _mm256_blendv_ps(pos, neg, sign));
         op!(store8(a: __m256) -> [f32; 8], {
             let mut out = [0.0f32; 8];
             _mm256_storeu_ps(out.as_mut_ptr(), a);
@@ -320,6 +323,23 @@ mod sse2 {
             let lo = sse!(_mm_movemask_ps(_mm_cmple_ps(a[0], b[0]))) as u32;
             let hi = sse!(_mm_movemask_ps(_mm_cmple_ps(a[1], b[1]))) as u32;
             lo | hi << 4
+        }
+        #[inline(always)]
+        fn select_sign8(
+            self,
+            sign: [__m128; 2],
+            neg: [__m128; 2],
+            pos: [__m128; 2],
+        ) -> [__m128; 2] {
+            // SSE2 has no blend: the sign bit spread over the lane by an arithmetic shift
+            // masks `neg` in and `pos` out.
+            let pick = |s: __m128, n: __m128, p: __m128| {
+                sse!({
+                    let m = _mm_castsi128_ps(_mm_srai_epi32::<31>(_mm_castps_si128(s)));
+                    _mm_or_ps(_mm_and_ps(m, n), _mm_andnot_ps(m, p))
+                })
+            };
+            [pick(sign[0], neg[0], pos[0]), pick(sign[1], neg[1], pos[1])]
         }
         #[inline(always)]
         fn store8(self, a: [__m128; 2]) -> [f32; 8] {

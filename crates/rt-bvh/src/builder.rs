@@ -606,9 +606,9 @@ fn ceil_log2(n: usize) -> usize {
 /// A_R·B(N_R)) / A`, where `B(n)` counts blocks of [`Ctx::block`] primitives (leaves are tested
 /// a pack at a time), and the set becomes a leaf when no plane beats `C_isect · B(N)` and it fits
 /// in a leaf. A set of one block or less is a leaf without pricing a plane (Embree's minimum
-/// leaf size for its four-triangle leaves). A set too big for a leaf whose centres coincide is split by count, and so is any
-/// set once the remaining depth budget only just fits a balanced split: that keeps every tree
-/// within [`MAX_DEPTH`], the traversal stacks' bound.
+/// leaf size for its four-triangle leaves). A set too big for a leaf whose centres coincide is
+/// split by count, and so is any set once the remaining depth budget only just fits a balanced
+/// split: that keeps every tree within [`MAX_DEPTH`], the traversal stacks' bound.
 fn plan<G: ?Sized>(
     ctx: &Ctx<'_, G>,
     refs: &[PrimRef],

@@ -43,13 +43,14 @@
 //!   and there are O(log N) levels for balanced splits; sets whose remaining depth budget only
 //!   just fits a balanced tree are split by count, so the depth never exceeds [`MAX_DEPTH`] and
 //!   degenerate input costs O(N · MAX_DEPTH) at worst. Scratch memory: 32 bytes per primitive,
-//!   up to 512 KB per thread for partitioning, plus, in the parallel build, the subtrees built
-//!   as tasks until they are appended (up to a second copy of the tree), so a build's scratch
-//!   stays below the finished tree plus its input (`cargo xtask scale` measures it). With the `parallel` feature (default) large inputs
-//!   build on rayon's threads; the tree is the same, byte for byte, on any number of threads
-//!   and without the feature.
+//!   up to 512 KB per running build task for partitioning, plus, in the parallel build, the
+//!   subtrees built as tasks until they are appended (up to a second copy of the tree), so a
+//!   build's scratch stays below the finished tree plus its input (`cargo xtask scale` measures
+//!   it). With the `parallel` feature (default) large inputs build on rayon's threads; the
+//!   tree is the same, byte for byte, on any number of threads and without the feature.
 //! - **Memory**: see the layouts above.
-//! - **Traversal step** (wide): a node visit is one 8-lane slab test (six loads, subtractions,
+//! - **Traversal step** (wide): a node visit is one 8-lane slab test (six loads, six blends
+//!   that pick each axis' near and far plane by the direction's sign, subtractions,
 //!   multiplications and min/max, one compare and a mask: 256-bit operations with AVX2, two
 //!   128-bit halves with SSE2), then the children entered are sorted by entry distance (closest
 //!   hit) or pushed as they are (any hit). A leaf visit is one 4-lane triangle test per pack

@@ -27,9 +27,9 @@
 
 use crate::kernels::Simd;
 use crate::node::{ChildRef, Node, WIDTH, WideNode};
-use crate::simd::Stack;
 use crate::traverse::{Leaves, WIDE_STACK};
 use crate::{Items, MAX_DEPTH};
+use rt_core::Stack;
 use rt_core::bundle::{Bundle, Lanes, narrow};
 use rt_core::{BUNDLE_LANES, Primitive, SLAB_FAR_SCALE, Stats};
 

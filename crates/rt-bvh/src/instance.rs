@@ -4,7 +4,7 @@ use crate::{Bvh, BvhParams, Layout, MAX_DEPTH};
 use rt_core::glam::Vec3;
 use rt_core::{
     Aabb, Accel, Instance, InstanceHit, InstancePointHit, InstancePointQuery, InstanceTransform,
-    PrimHit, Primitive, Ray, SLAB_FAR_SCALE, Stats, TransformPrimitive, TwoLevel,
+    PrimHit, Primitive, Ray, SLAB_FAR_SCALE, Stack, Stats, TransformPrimitive, TwoLevel,
 };
 
 /// A field of instances under one BVH: the top level of a two-level scene.
@@ -135,8 +135,7 @@ impl<P: Primitive> TwoLevel<P> for Instances<P> {
         if ids.is_empty() || nodes[0].bounds.distance_squared(point) > query.radius_sq() {
             return None;
         }
-        let mut stack = [(0u32, 0.0f32); MAX_DEPTH];
-        let mut sp = 0;
+        let mut stack = Stack::<(u32, f32), MAX_DEPTH>::new();
         let mut current = 0usize;
         loop {
             stats.node_visit();
@@ -156,8 +155,7 @@ impl<P: Primitive> TwoLevel<P> for Instances<P> {
                 };
                 if d_near <= query.radius_sq() {
                     if d_far <= query.radius_sq() {
-                        stack[sp] = (far as u32, d_far);
-                        sp += 1;
+                        stack.push((far as u32, d_far));
                     }
                     current = near;
                     continue;
@@ -165,14 +163,12 @@ impl<P: Primitive> TwoLevel<P> for Instances<P> {
             }
             // The next pushed subtree still within the ball, which may have shrunk.
             loop {
-                if sp == 0 {
+                let Some((index, d)) = stack.pop() else {
                     return query.best().map(|h| InstancePointHit {
                         id: self.instances[h.instance as usize].id(),
                         ..h
                     });
-                }
-                sp -= 1;
-                let (index, d) = stack[sp];
+                };
                 if d <= query.radius_sq() {
                     current = index as usize;
                     break;
@@ -212,8 +208,7 @@ impl<P: Primitive> Instances<P> {
             v: 0.0,
         };
         nodes[0].bounds.padded(pad).intersect(ray, best.t)?;
-        let mut stack = [(0u32, 0.0f32); MAX_DEPTH];
-        let mut sp = 0;
+        let mut stack = Stack::<(u32, f32), MAX_DEPTH>::new();
         let mut current = 0usize;
         loop {
             stats.node_visit();
@@ -254,19 +249,16 @@ impl<P: Primitive> Instances<P> {
                 };
                 if t_near != f32::INFINITY {
                     if t_far != f32::INFINITY {
-                        stack[sp] = (far as u32, t_far);
-                        sp += 1;
+                        stack.push((far as u32, t_far));
                     }
                     current = near;
                     continue;
                 }
             }
             loop {
-                if sp == 0 {
+                let Some((index, t_entry)) = stack.pop() else {
                     return (best.instance != u32::MAX).then_some(best);
-                }
-                sp -= 1;
-                let (index, t_entry) = stack[sp];
+                };
                 if ANY || t_entry <= best.t * SLAB_FAR_SCALE {
                     current = index as usize;
                     break;

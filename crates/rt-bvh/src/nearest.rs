@@ -1,9 +1,9 @@
 //! Ball queries (closest point): nearest box first, pruned by the query's shrinking radius.
 
 use crate::node::{ChildRef, WIDTH, WideNode};
-use crate::simd::Stack;
 use crate::traverse::WIDE_STACK;
 use crate::{Bvh, MAX_DEPTH};
+use rt_core::Stack;
 use rt_core::glam::Vec3;
 use rt_core::{Aabb, BallQuery, Primitive, Stats, TriangleTest};
 
@@ -29,8 +29,7 @@ impl<P: Primitive> Bvh<P> {
         if self.primitive_ids().is_empty() || nodes[0].bounds.distance_squared(c) > q.radius_sq() {
             return;
         }
-        let mut stack = [(0u32, 0.0f32); MAX_DEPTH];
-        let mut sp = 0;
+        let mut stack = Stack::<(u32, f32), MAX_DEPTH>::new();
         let mut current = 0usize;
         loop {
             stats.node_visit();
@@ -56,8 +55,7 @@ impl<P: Primitive> Bvh<P> {
                 let r = q.radius_sq();
                 if d_near <= r {
                     if d_far <= r {
-                        stack[sp] = (far as u32, d_far);
-                        sp += 1;
+                        stack.push((far as u32, d_far));
                     }
                     current = near;
                     continue;
@@ -65,11 +63,9 @@ impl<P: Primitive> Bvh<P> {
             }
             // Pop the next subtree that still meets the ball.
             loop {
-                if sp == 0 {
+                let Some((index, d)) = stack.pop() else {
                     return;
-                }
-                sp -= 1;
-                let (index, d) = stack[sp];
+                };
                 if d <= q.radius_sq() {
                     current = index as usize;
                     break;

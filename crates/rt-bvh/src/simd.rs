@@ -1,5 +1,5 @@
-//! Runtime CPU dispatch for the wide layout, its AVX2 kernels and its traversal stack: the only
-//! module of the crate allowed `unsafe`.
+//! Runtime CPU dispatch for the wide layout and its AVX2 kernels: the only module of the crate
+//! allowed `unsafe`.
 //!
 //! - [`Avx2`] implements the kernels' [`Simd`] operations with AVX2 intrinsics, and [`Sse2`]
 //!   with SSE2 ones, the fallback on x86-64 CPUs without AVX2 (every x86-64 CPU runs SSE2). An intrinsic
@@ -11,8 +11,6 @@
 //!   likewise, inside [`bundle_avx2`]. A plain `cargo build` without `RUSTFLAGS`
 //!   therefore runs AVX2 code on CPUs that have it and baseline code elsewhere (SSE2 on x86-64;
 //!   aarch64 compiles the portable kernels only).
-//! - [`Stack`] leaves its slots uninitialised, so a ray does not pay for zeroing hundreds of
-//!   entries it will never use; it reads a slot only after writing it.
 #![allow(unsafe_code)]
 
 use crate::bundle::wide_bundle;
@@ -23,7 +21,6 @@ use crate::node::WideNode;
 use crate::traverse::{Leaves, wide};
 use rt_core::bundle::{Bundle, Lanes};
 use rt_core::{Hit, Ray, Stats};
-use std::mem::MaybeUninit;
 
 /// The instruction set the wide traversal runs with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -454,42 +451,5 @@ mod sse2 {
             };
             [e(cx, by, cy, bx), e(ax, cy, ay, cx), e(bx, ay, by, ax)]
         }
-    }
-}
-
-/// A fixed-capacity stack whose slots start uninitialised.
-pub(crate) struct Stack<T: Copy, const N: usize> {
-    items: [MaybeUninit<T>; N],
-    len: usize,
-}
-
-impl<T: Copy, const N: usize> Stack<T, N> {
-    #[inline(always)]
-    pub fn new() -> Self {
-        Self {
-            items: [const { MaybeUninit::uninit() }; N],
-            len: 0,
-        }
-    }
-
-    /// Pushes `v`.
-    ///
-    /// # Panics
-    /// When the stack is full (the builder bounds the depth so that it never is).
-    #[inline(always)]
-    pub fn push(&mut self, v: T) {
-        self.items[self.len] = MaybeUninit::new(v);
-        self.len += 1;
-    }
-
-    #[inline(always)]
-    pub fn pop(&mut self) -> Option<T> {
-        if self.len == 0 {
-            return None;
-        }
-        self.len -= 1;
-        // SAFETY: slots `0..len` (before the decrement) were each written by `push`, and `len`
-        // only grows through `push`, so slot `len` holds a value written by it.
-        Some(unsafe { self.items[self.len].assume_init() })
     }
 }

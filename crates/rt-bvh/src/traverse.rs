@@ -4,8 +4,8 @@
 use crate::kernels::{self, BoxRay, RayData, Simd};
 use crate::node::Node;
 use crate::node::{ChildRef, TriPack, WIDTH, WideNode};
-use crate::simd::Stack;
 use crate::{Items, MAX_DEPTH};
+use rt_core::Stack;
 use rt_core::bundle::Lanes;
 use rt_core::glam::Vec3;
 use rt_core::trace::{self, Event, Place};
@@ -65,8 +65,7 @@ fn binary_walk<P: Primitive, S: Stats, const ANY: bool>(
     if items.ids.is_empty() || nodes[0].bounds.intersect(ray, best.t).is_none() {
         return None;
     }
-    let mut stack = [(0u32, 0.0f32); MAX_DEPTH];
-    let mut sp = 0;
+    let mut stack = Stack::<(u32, f32), MAX_DEPTH>::new();
     let mut current = 0usize;
     loop {
         stats.node_visit();
@@ -139,8 +138,7 @@ fn binary_walk<P: Primitive, S: Stats, const ANY: bool>(
             }
             if t_near != f32::INFINITY {
                 if t_far != f32::INFINITY {
-                    stack[sp] = (far as u32, t_far);
-                    sp += 1;
+                    stack.push((far as u32, t_far));
                     trace::report(stats, || Event::Push {
                         place: Place::Node(far as u32),
                         t: t_far,
@@ -153,12 +151,10 @@ fn binary_walk<P: Primitive, S: Stats, const ANY: bool>(
         }
         // Pop the next subtree that can still hold a hit no farther than the best so far.
         loop {
-            if sp == 0 {
+            let Some((index, t_entry)) = stack.pop() else {
                 trace::report(stats, || Event::Note("stack empty: done"));
                 return (best.prim != u32::MAX).then_some(best);
-            }
-            sp -= 1;
-            let (index, t_entry) = stack[sp];
+            };
             let skipped = t_entry > best.t * SLAB_FAR_SCALE;
             trace::report(stats, || Event::Pop {
                 place: Place::Node(index),

@@ -1,9 +1,9 @@
 //! Run-time choice of vector instructions for the bundle kernels ([`Lanes`](crate::bundle::Lanes)),
 //! the filling of bundles ([`fill_sealed`]) and the bundle walks ([`Isa::run`]).
 //!
-//! The only `unsafe` of rt-core besides `pod_struct!`: the AVX2 and AVX-512 kernels and the
-//! frames the bundle walks run in, each called only when the CPU was found to have the
-//! features it is compiled with ([`Isa::available`]). Each kernel here has a portable twin in
+//! The only `unsafe` of rt-core besides `pod_struct!` and [`Stack`](crate::Stack): the AVX2
+//! and AVX-512 kernels and the frames the bundle walks run in, each called only when the CPU
+//! was found to have the features it is compiled with ([`Isa::available`]). Each kernel here has a portable twin in
 //! plain arrays ([`watertight8_portable`]; `Bundle::fill_sealed`'s passes) that it matches
 //! bit for bit: the same IEEE operations in the same order, no fused multiply-add.
 #![allow(unsafe_code)]

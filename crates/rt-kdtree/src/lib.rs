@@ -51,7 +51,8 @@
 //! primitive in the next leaf; such a hit is kept as the best so far, and the walk stops at the
 //! first leaf that starts beyond it. Rays lying in a split plane visit both sides. Two traversals
 //! ([`Traversal`]):
-//! - `Stack`: far children go on a fixed stack of [`MAX_DEPTH`] entries, no allocation.
+//! - `Stack`: far children go on a fixed stack of [`MAX_DEPTH`] entries ([`rt_core::Stack`]),
+//!   neither allocated nor zeroed per ray.
 //! - `Restart`: stackless kd-restart with push-down (Foley & Sugerman 2005; Horn et al. 2007).
 //!   After a leaf it descends again from the deepest node known to hold the rest of the ray,
 //!   with the interval starting at the leaf's exit. A ray that passes exactly through an edge or

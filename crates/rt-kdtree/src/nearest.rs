@@ -1,7 +1,7 @@
 //! Ball queries (closest point): near side first, the far side only while the ball reaches it.
 
 use crate::{KdTree, MAX_DEPTH};
-use rt_core::{Aabb, BallQuery, Mailbox, Primitive, Stats};
+use rt_core::{Aabb, BallQuery, Mailbox, Primitive, Stack, Stats};
 
 /// Mailbox slots per query: a primitive listed in several leaves is offered once.
 const MAILBOX: usize = 8;
@@ -17,8 +17,7 @@ impl<P: Primitive> KdTree<P> {
             return;
         }
         let mut mailbox = Mailbox::<MAILBOX>::new();
-        let mut stack = [(0u32, Aabb::EMPTY, 0.0f32); MAX_DEPTH];
-        let mut sp = 0;
+        let mut stack = Stack::<(u32, Aabb, f32), MAX_DEPTH>::new();
         let (mut current, mut cell) = (0usize, self.bounds);
         loop {
             stats.node_visit();
@@ -47,19 +46,16 @@ impl<P: Primitive> KdTree<P> {
                 let r = q.radius_sq();
                 if dn <= r {
                     if df <= r {
-                        stack[sp] = (far as u32, far_cell, df);
-                        sp += 1;
+                        stack.push((far as u32, far_cell, df));
                     }
                     (current, cell) = (near, near_cell);
                     continue;
                 }
             }
             loop {
-                if sp == 0 {
+                let Some((index, popped, d)) = stack.pop() else {
                     return;
-                }
-                sp -= 1;
-                let (index, popped, d) = stack[sp];
+                };
                 if d <= q.radius_sq() {
                     (current, cell) = (index as usize, popped);
                     break;

@@ -18,8 +18,11 @@ use std::mem::MaybeUninit;
 /// stack.push((3, 0.5));
 /// stack.push((7, 1.5));
 /// assert_eq!(stack.pop(), Some((7, 1.5)));
+/// if let Some(top) = stack.last_mut() {
+///     top.1 = 2.5;
+/// }
 /// assert_eq!(stack.len(), 1);
-/// assert_eq!(stack.pop(), Some((3, 0.5)));
+/// assert_eq!(stack.pop(), Some((3, 2.5)));
 /// assert_eq!(stack.pop(), None);
 /// ```
 pub struct Stack<T: Copy, const N: usize> {
@@ -58,6 +61,14 @@ impl<T: Copy, const N: usize> Stack<T, N> {
         // SAFETY: slots `0..len` (before the decrement) were each written by `push`, and `len`
         // only grows through `push`, so slot `len` holds a value written by it.
         Some(unsafe { self.items[self.len].assume_init() })
+    }
+
+    /// The value pushed last, to change in place, or `None` if the stack is empty.
+    #[inline(always)]
+    pub fn last_mut(&mut self) -> Option<&mut T> {
+        let last = self.len.checked_sub(1)?;
+        // SAFETY: slot `len - 1` was written by `push` (slots `0..len` all were, as in `pop`).
+        Some(unsafe { self.items[last].assume_init_mut() })
     }
 
     /// How many values the stack holds.
@@ -109,8 +120,10 @@ mod tests {
             "a push beyond the capacity must panic, not write past the end"
         );
         let mut s = Stack::<u32, 3>::new();
+        assert_eq!(s.last_mut(), None);
         s.push(5);
         s.push(6);
-        assert_eq!((s.pop(), s.pop(), s.pop()), (Some(6), Some(5), None));
+        *s.last_mut().unwrap() += 1;
+        assert_eq!((s.pop(), s.pop(), s.pop()), (Some(7), Some(5), None));
     }
 }

@@ -41,7 +41,7 @@ use crate::builder::MAX_DEPTH;
 use crate::node::{Block, Node};
 use rt_core::glam::{BVec3A, Vec3A};
 use rt_core::trace::{self, Event, Place};
-use rt_core::{Aabb, Hit, Mailbox, NEAR_TIE, Primitive, Ray, SLAB_FAR_SCALE, Stats, leaf};
+use rt_core::{Aabb, Hit, Mailbox, NEAR_TIE, Primitive, Ray, SLAB_FAR_SCALE, Stack, Stats, leaf};
 
 /// Mailbox slots per ray: the last this many primitives tested are not tested again.
 pub(crate) const MAILBOX: usize = 8;
@@ -330,12 +330,14 @@ impl<P: Primitive> Octree<P> {
             order,
             left,
         };
-        let mut stack = [frame; STACK];
-        let mut sp = 1;
-        while sp > 0 {
-            let f = &mut stack[sp - 1];
+        // PERF: not filled per ray with copies of the first frame (21 frames of 48 bytes). In-
+        // process A/B on the four peer scenes, one thread, medians of 3-5 processes: primary
+        // rays 1.03-1.05x as fast, shadow 1.01-1.08x, incoherent 1.00-1.02x.
+        let mut stack = Stack::<Frame, STACK>::new();
+        stack.push(frame);
+        while let Some(f) = stack.last_mut() {
             if f.left == 0 {
-                sp -= 1;
+                stack.pop();
                 continue;
             }
             let i = f.order & 7;
@@ -368,14 +370,13 @@ impl<P: Primitive> Octree<P> {
                         children_order(&r, lo, hi, slabs, &self.blocks[block], t_from);
                     let b = (block as u32, &self.blocks[block]);
                     report_children(stats, &r, (lo, hi), b, (order, left));
-                    stack[sp] = Frame {
+                    stack.push(Frame {
                         lo,
                         hi,
                         block: block as u32,
                         order,
                         left,
-                    };
-                    sp += 1;
+                    });
                 }
             }
         }

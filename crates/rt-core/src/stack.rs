@@ -1,8 +1,9 @@
 //! A fixed-capacity traversal stack whose slots start uninitialised.
 //!
 //! A traversal's stack is sized for the deepest tree (hundreds of bytes), and most rays use a
-//! handful of its slots. An array of plain values is zeroed on every call; this one is not, so a
-//! ray pays for the entries it pushes and nothing else. It reads a slot only after writing it,
+//! handful of its slots. An array of plain values must be initialised on every call, unless the
+//! compiler proves that no slot is read before it is written (it does for some walks, not for
+//! others); this one never is, so a ray pays for the entries it pushes and nothing else. It reads a slot only after writing it,
 //! which is the one `unsafe` block here.
 #![allow(unsafe_code)]
 

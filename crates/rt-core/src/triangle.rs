@@ -79,9 +79,14 @@ impl Triangle {
             sy,
             sz,
         } = *shear;
-        let a = self.v0 - ray.origin;
-        let b = self.v1 - ray.origin;
-        let c = self.v2 - ray.origin;
+        // Arrays, not `Vec3`s: glam indexes a `Vec3` by a runtime axis with a `match`, two
+        // branches per access, where an array takes one bounds check that the compiler can
+        // share between the accesses with the same index. (PERF: cachegrind on 60 000 bunny rays,
+        // instructions per ray: the kd-tree 1690 -> 1591 (primary rays), the octree 5257 -> 4782
+        // and the binary BVH 2008 -> 1895 (incoherent rays), with 10-21% fewer branches.)
+        let a = (self.v0 - ray.origin).to_array();
+        let b = (self.v1 - ray.origin).to_array();
+        let c = (self.v2 - ray.origin).to_array();
         let ax = a[kx] - sx * a[kz];
         let ay = a[ky] - sy * a[kz];
         let bx = b[kx] - sx * b[kz];
@@ -199,14 +204,16 @@ impl Shear {
         };
         let kx = if kz == 2 { 0 } else { kz + 1 };
         let ky = if kx == 2 { 0 } else { kx + 1 };
-        let (kx, ky) = if dir[kz] < 0.0 { (ky, kx) } else { (kx, ky) };
-        let sz = 1.0 / dir[kz];
+        // An array for the runtime axes, as in `intersect_sheared`.
+        let d = dir.to_array();
+        let (kx, ky) = if d[kz] < 0.0 { (ky, kx) } else { (kx, ky) };
+        let sz = 1.0 / d[kz];
         Self {
             kx,
             ky,
             kz,
-            sx: dir[kx] * sz,
-            sy: dir[ky] * sz,
+            sx: d[kx] * sz,
+            sy: d[ky] * sz,
             sz,
         }
     }

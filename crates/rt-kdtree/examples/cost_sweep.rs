@@ -1,6 +1,6 @@
 //! How the build constants shape a kd-tree: nodes, duplication, visits and primitive tests per
-//! primary ray, and single-threaded build time, from Wald & Havran's published constants to the
-//! default.
+//! primary ray, single-threaded build time and speed, from Wald & Havran's published constants to
+//! the default.
 //!
 //! ```sh
 //! cargo run --release -p rt-kdtree --example cost_sweep -- ../shared/meshes/stanford-bunny.obj
@@ -8,7 +8,8 @@
 //!
 //! The rays are `cargo xtask compare`'s default primary rays (1024×768). The counts are
 //! deterministic; a build time is the best of three single-threaded builds (`rt_shootout::measure`,
-//! which also times three traces), so compare the times only within one run.
+//! which also times three traces, on the calling thread), so compare the times only within one
+//! run.
 
 use rt_core::Accel;
 use rt_kdtree::{KdParams, KdTree};
@@ -48,14 +49,29 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "K_T 25, 3 bad refines, depth 7+",
             KdParams {
                 empty_cut: 0.0,
+                leaf_size: 0,
                 ..KdParams::sah()
             },
         ),
-        ("  with empty cut 0.25 (sah)", KdParams::sah()),
+        (
+            "  with empty cut 0.25",
+            KdParams {
+                leaf_size: 0,
+                ..KdParams::sah()
+            },
+        ),
+        ("  with leaf size 3 (sah)", KdParams::sah()),
     ];
     println!(
-        "{:<32} {:>9} {:>5} {:>9} {:>10} {:>9} {:>8}",
-        "configuration", "nodes", "depth", "refs/prim", "visits/ray", "tests/ray", "build ms"
+        "{:<32} {:>9} {:>5} {:>9} {:>10} {:>9} {:>8} {:>8}",
+        "configuration",
+        "nodes",
+        "depth",
+        "refs/prim",
+        "visits/ray",
+        "tests/ray",
+        "build ms",
+        "Mrays/s"
     );
     for (name, params) in rows {
         let params = KdParams {
@@ -65,13 +81,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let m = measure::<KdTree<_>>(&tris, &params, &rays, 3);
         let s = m.accel.build_stats();
         println!(
-            "{name:<32} {:>9} {:>5} {:>9.2} {:>10.1} {:>9.3} {:>8.0}",
+            "{name:<32} {:>9} {:>5} {:>9.2} {:>10.1} {:>9.3} {:>8.0} {:>8.2}",
             s.nodes,
             s.max_depth,
             s.duplication(),
             m.per_ray(m.counters.node_visits),
             m.per_ray(m.counters.prim_tests),
             m.build_ms,
+            m.mrays_per_s(),
         );
     }
     Ok(())

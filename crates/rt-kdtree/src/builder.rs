@@ -438,6 +438,13 @@ fn split<P: Primitive>(
         let (left, right) = cut_empty(task, plane, task.bad_refines);
         return Some((Children::InPlace(left, right), plane.axis, plane.pos));
     }
+    // A small node keeps the empty-space cuts above (cheap, and they let rays skip its cell) but
+    // prices no plane. (PERF: leaf size 3 against 0, the bunny's single-threaded build 253 ->
+    // 205 ms, best of 9, and 823k -> 520k nodes; speed on six meshes, one thread: primary rays
+    // 1.02-1.10x, shadow 1.01-1.11x, incoherent 1.05-1.18x.)
+    if task.count <= ctx.leaf_size {
+        return None;
+    }
     let plane = best_plane(ctx, task, arena)?;
     let bad_refines = accept(ctx, task.count, task.bad_refines, &plane)?;
     let children = if plane.left_count == 0 || plane.right_count == 0 {
@@ -503,7 +510,7 @@ fn empty_space<P>(ctx: &Ctx<'_, P>, task: &Task, arena: &[Event]) -> Option<Plan
 /// Whether a node of `n` primitives at `depth` may be split at all.
 #[inline]
 fn may_split<P>(ctx: &Ctx<'_, P>, n: usize, depth: u32) -> bool {
-    n > 0 && n > ctx.leaf_size && depth < ctx.max_depth
+    n > 0 && depth < ctx.max_depth
 }
 
 /// The termination rule for a node of `n` primitives whose best plane is `plane`: the node's
@@ -953,8 +960,60 @@ fn clip_both<P: Primitive>(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rt_core::Triangle;
+    use crate::KdTree;
     use rt_core::glam::Vec3;
+    use rt_core::{Accel, Counters, Ray, Triangle};
+
+    /// A small triangle in the plane `z`, at x 0.9..1 and y 0..0.1.
+    fn small(z: f32) -> Triangle {
+        Triangle::new(
+            Vec3::new(0.9, 0.0, z),
+            Vec3::new(1.0, 0.0, z),
+            Vec3::new(0.95, 0.1, z),
+        )
+    }
+
+    #[test]
+    fn a_node_of_at_most_leaf_size_primitives_prices_no_plane() {
+        // Three triangles in parallel planes, with no empty slab around them: the SAH would
+        // separate them, `leaf_size` 3 keeps them in one leaf.
+        let tris = [small(0.2), small(0.5), small(0.8)];
+        let three = KdParams::sah();
+        assert_eq!(three.leaf_size, 3);
+        assert_eq!(KdTree::build(&tris, &three).nodes().len(), 1);
+        let none = KdParams {
+            leaf_size: 0,
+            ..KdParams::sah()
+        };
+        assert!(KdTree::build(&tris, &none).nodes().len() > 1);
+    }
+
+    #[test]
+    fn a_small_node_still_loses_its_empty_slabs() {
+        // A large triangle in the plane x = 0 and the three small ones at x 0.9..1: the cell of
+        // the three spans y 0..1 but they fill only y 0..0.1. A ray through the empty part of
+        // that cell tests nothing when the slab is cut off, and the three triangles when it
+        // is not.
+        let tris = [
+            Triangle::new(Vec3::ZERO, Vec3::Y, Vec3::Z),
+            small(0.2),
+            small(0.5),
+            small(0.8),
+        ];
+        let ray = Ray::new(Vec3::new(0.95, 0.5, 2.0), -Vec3::Z);
+        let tests = |params: &KdParams| {
+            let tree = KdTree::build(&tris, params);
+            let mut counters = Counters::default();
+            assert!(tree.intersect_with(&ray, &mut counters).is_none());
+            counters.prim_tests
+        };
+        assert_eq!(tests(&KdParams::sah()), 0);
+        let no_cut = KdParams {
+            empty_cut: 0.0,
+            ..KdParams::sah()
+        };
+        assert_eq!(tests(&no_cut), 3);
+    }
 
     #[test]
     fn empty_space_cuts_the_widest_slab_at_the_parts_bounds() {

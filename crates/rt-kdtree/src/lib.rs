@@ -18,8 +18,8 @@
 //!   `λ · (K_T + K_I · (P_L · N_L + P_R · N_R))`, with `P = SA(child) / SA(V)` and `λ =
 //!   1 - empty_bonus` when one side is empty; a leaf costs `K_I · N`. A node becomes a leaf when
 //!   no plane beats the leaf cost (or after `max_bad_refines` such planes on one path, as in
-//!   pbrt), when it holds at most `leaf_size` primitives, or at the depth limit
-//!   `depth_base + 1.3 · log2 N` (pbrt: `8 + 1.3 · log2 N`).
+//!   pbrt), when it holds at most `leaf_size` primitives (after the empty-space cuts below), or
+//!   at the depth limit `depth_base + 1.3 · log2 N` (pbrt: `8 + 1.3 · log2 N`).
 //! - **Empty space** (`empty_cut`): an empty slab at a face of the cell that spans at least this
 //!   fraction of the cell's extent is cut off without pricing any plane. The SAH with an
 //!   empty-side bonus would pick most such cuts anyway; skipping the sweep there saves build
@@ -83,16 +83,20 @@
 //!
 //! # Choosing the constants
 //! The ratio K_T / K_I sets the leaf size, and the depth limit and the bad-refine allowance
-//! decide how far a path may go. Wald & Havran's published constants ([`KdParams::wald_havran`]:
-//! K_T 15, depth `8 + 1.3 · log2 N`) make a smaller tree that tests more primitives per ray than
-//! the binned-SAH BVH. The default ([`KdParams::sah`]) lets a path take up to three
-//! non-improving splits, which finds the splits that pay off two levels down, while a higher K_T
-//! and one level less of depth keep the tree from growing where they do not; cutting off wide
-//! empty slabs without pricing pays for most of the extra build time. Prefer `wald_havran` for
-//! the smaller tree and faster build; lower `traversal_cost` further when a primitive test is
-//! expensive compared with a traversal step (curved or displaced primitives).
+//! decide how far a path may go. Wald & Havran's published constants
+//! ([`KdParams::wald_havran`]: K_T 15, depth `8 + 1.3 · log2 N`) price every node down to one
+//! primitive. The default ([`KdParams::sah`]) lets a path take up to three non-improving splits,
+//! which finds the splits that pay off two levels down, while a higher K_T and one level less of
+//! depth keep the tree from growing where they do not. Two rules then trade a few primitive
+//! tests for a smaller tree that builds and traces faster: wide empty slabs are cut off without
+//! pricing, and a node of at most three primitives prices no plane (`leaf_size`). Pricing the
+//! planes of a node of two or three primitives mostly adds levels of small cells, which a ray
+//! crosses in more steps than the tests they save. On the meshes measured, stopping at three was
+//! faster on every ray kind; stopping at four or more lost on some views. Lower
+//! `traversal_cost`, and `leaf_size` with it, when a primitive test is expensive compared with a
+//! traversal step (curved or displaced primitives).
 //! `cargo run --release -p rt-kdtree --example cost_sweep` prints the trade-off (nodes, depth,
-//! references, visits and tests per ray, build time) on the bunny.
+//! references, visits and tests per ray, build time, speed) on the bunny.
 //!
 //! # Measurements
 //! The kd-tree's figures beside every other structure's (build time, memory, shape, visits and
@@ -167,7 +171,8 @@ pub struct KdParams {
     pub depth_base: f32,
     /// How many splits that do not lower the cost a path may take before a node becomes a leaf.
     pub max_bad_refines: u32,
-    /// Nodes with at most this many primitives become leaves without pricing splits.
+    /// Nodes with at most this many primitives price no split plane: they become leaves, after
+    /// any empty slabs around them wide enough for `empty_cut` are cut off.
     pub leaf_size: u32,
     /// Build the subtrees of large nodes in parallel (rayon); the tree is the same either way.
     pub parallel: bool,
@@ -179,8 +184,9 @@ impl KdParams {
     /// The default: Wald & Havran's cost model and perfect splits, with constants chosen for
     /// few primitive tests at a bounded build time (see "Choosing the constants" in the crate
     /// documentation): K_T = 25, K_I = 20, λ = 0.8 for an empty side, up to three splits that do
-    /// not lower the cost on a path, depth limit `7 + 1.3 · log2 N`, and empty slabs wider than a
-    /// quarter of the cell cut off without pricing.
+    /// not lower the cost on a path, depth limit `7 + 1.3 · log2 N`, empty slabs wider than a
+    /// quarter of the cell cut off without pricing, and no plane priced for a node of at most
+    /// three primitives.
     pub fn sah() -> Self {
         Self {
             traversal_cost: 25.0,
@@ -191,7 +197,7 @@ impl KdParams {
             max_depth: None,
             depth_base: 7.0,
             max_bad_refines: 3,
-            leaf_size: 0,
+            leaf_size: 3,
             parallel: true,
             traversal: Traversal::Stack,
         }
@@ -205,6 +211,7 @@ impl KdParams {
             empty_cut: 0.0,
             depth_base: 8.0,
             max_bad_refines: 0,
+            leaf_size: 0,
             ..Self::sah()
         }
     }

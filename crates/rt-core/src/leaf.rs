@@ -5,7 +5,7 @@
 //! their primitives, needs no mailbox.
 
 use crate::trace::{self, Event};
-use crate::{Hit, Mailbox, Primitive, Ray, Shear, Stats, TriangleTest};
+use crate::{Hit, Mailbox, Primitive, Ray, Stats};
 
 /// The "no hit yet" record of a ray whose interval ends at `t_max`.
 #[inline(always)]
@@ -18,53 +18,20 @@ pub fn no_hit(t_max: f32) -> Hit {
     }
 }
 
-/// A ray and its [`Shear`], which a walk makes once per ray for [`test_primitives`]: the
-/// watertight triangle test needs the shear, and computing it for every test costs a division
-/// and a few branches each time. For primitives that are not triangles it goes unused and is
-/// compiled away.
-// PERF: cachegrind, 60 000 bunny primary rays, instructions per ray: the kd-tree 1600 -> 1570,
-// the octree 4692 -> 4417.
-#[derive(Clone, Copy, Debug)]
-pub struct LeafRay<'a> {
-    ray: &'a Ray,
-    shear: Shear,
-}
-
-impl<'a> LeafRay<'a> {
-    /// `ray` with its shear.
-    #[inline(always)]
-    pub fn new(ray: &'a Ray) -> Self {
-        Self {
-            ray,
-            shear: Shear::new(ray.dir()),
-        }
-    }
-
-    /// The ray.
-    #[inline(always)]
-    pub fn ray(&self) -> &'a Ray {
-        self.ray
-    }
-}
-
 /// Tests the primitives `ids` (indices into `prims`) against `[ray.t_min, best.t]`, keeping
 /// the closest hit in `best` (ties to the smaller index). With `ANY`, returns true at the first
 /// hit instead (its index in `best.prim`). With `use_mailbox`, primitives among the last `N`
 /// this ray tested are skipped and reported to `stats` as mailbox skips.
-///
-/// Triangles run the watertight test with the shear `ray` carries (the same bits as their
-/// `intersect`, by [`Primitive::as_triangle`]'s contract).
 #[inline(always)]
 pub fn test_primitives<P: Primitive, S: Stats, const ANY: bool, const N: usize>(
     prims: &[P],
     ids: &[u32],
-    ray: &LeafRay<'_>,
+    ray: &Ray,
     best: &mut Hit,
     mailbox: &mut Mailbox<N>,
     use_mailbox: bool,
     stats: &mut S,
 ) -> bool {
-    let LeafRay { ray, ref shear } = *ray;
     for &id in ids {
         if use_mailbox && mailbox.check_and_insert(id) {
             stats.mailbox_skip();
@@ -73,15 +40,8 @@ pub fn test_primitives<P: Primitive, S: Stats, const ANY: bool, const N: usize>(
         }
         stats.prim_test();
         let prim = &prims[id as usize];
-        let watertight = match prim.as_triangle() {
-            Some((tri, TriangleTest::Watertight)) => Some(tri),
-            _ => None,
-        };
         if ANY {
-            let blocks = match watertight {
-                Some(tri) => tri.intersect_sheared(shear, ray, best.t).is_some(),
-                None => prim.occludes(ray, best.t),
-            };
+            let blocks = prim.occludes(ray, best.t);
             trace::blocked(stats, id, blocks);
             if blocks {
                 best.prim = id;
@@ -89,10 +49,7 @@ pub fn test_primitives<P: Primitive, S: Stats, const ANY: bool, const N: usize>(
             }
             continue;
         }
-        let hit = match watertight {
-            Some(tri) => tri.intersect_sheared(shear, ray, best.t),
-            None => prim.intersect(ray, best.t),
-        };
+        let hit = prim.intersect(ray, best.t);
         trace::tested(stats, id, hit.map(|h| h.t));
         if let Some(h) = hit
             && Hit::beats(h.t, id, best.t, best.prim)

@@ -8,9 +8,8 @@
 
 use crate::Grid;
 use crate::dda::{Dda, RayAxes};
-use rt_core::leaf::{self, LeafRay};
 use rt_core::trace::{self, Event, Place};
-use rt_core::{Hit, Mailbox, Primitive, Ray, SLAB_FAR_SCALE, Stats};
+use rt_core::{Hit, Mailbox, Primitive, Ray, SLAB_FAR_SCALE, Stats, leaf};
 
 /// Mailbox slots per ray: the last this many primitives tested are not tested again.
 pub(crate) const MAILBOX: usize = 8;
@@ -22,7 +21,7 @@ impl<P: Primitive> Grid<P> {
     fn test_cell<S: Stats, const ANY: bool>(
         &self,
         c: [u32; 3],
-        ray: &LeafRay<'_>,
+        ray: &Ray,
         best: &mut Hit,
         mailbox: &mut Mailbox<MAILBOX>,
         stats: &mut S,
@@ -53,7 +52,6 @@ impl<P: Primitive> Grid<P> {
         let mut dda = Dda::start(shape, &r, t0);
         let mut best = leaf::no_hit(ray.t_max);
         let mut mailbox = Mailbox::new();
-        let leaf_ray = LeafRay::new(ray);
         // Only the trace reads where the ray enters the current cell.
         let mut t_enter = t0;
         let enter = |cell: [u32; 3], t0: f32, t1: f32| Event::Enter {
@@ -65,7 +63,7 @@ impl<P: Primitive> Grid<P> {
         loop {
             stats.node_visit();
             trace::report(stats, || enter(dda.cell, t_enter, dda.exit().1.min(t1)));
-            if self.test_cell::<S, ANY>(dda.cell, &leaf_ray, &mut best, &mut mailbox, stats) {
+            if self.test_cell::<S, ANY>(dda.cell, ray, &mut best, &mut mailbox, stats) {
                 trace::report(stats, || Event::Note("a primitive blocks the ray: done"));
                 break;
             }
@@ -86,7 +84,7 @@ impl<P: Primitive> Grid<P> {
                     Event::Note("two planes crossed within rounding: the cell beside the path too")
                 });
                 trace::report(stats, || enter(c, t_exit, t_exit));
-                if self.test_cell::<S, ANY>(c, &leaf_ray, &mut best, &mut mailbox, stats) {
+                if self.test_cell::<S, ANY>(c, ray, &mut best, &mut mailbox, stats) {
                     return leaf::answer::<ANY>(best);
                 }
             }

@@ -10,9 +10,8 @@
 
 use crate::HGrid;
 use crate::builder::MAX_LEVELS;
-use rt_core::leaf::{self, LeafRay};
 use rt_core::trace::{self, Event, Place};
-use rt_core::{Hit, Mailbox, Primitive, Ray, SLAB_FAR_SCALE, Stats};
+use rt_core::{Hit, Mailbox, Primitive, Ray, SLAB_FAR_SCALE, Stats, leaf};
 use rt_grid::dda::{Dda, RayAxes};
 
 /// Mailbox slots per ray.
@@ -50,12 +49,11 @@ impl<P: Primitive> HGrid<P> {
         let mut sp = 1;
         let mut best = leaf::no_hit(ray.t_max);
         let mut mailbox = Mailbox::<MAILBOX>::new();
-        let leaf_ray = LeafRay::new(ray);
         let mut test = |ids: &[u32], best: &mut Hit, stats: &mut S| {
             leaf::test_primitives::<P, S, ANY, MAILBOX>(
                 &self.prims,
                 ids,
-                &leaf_ray,
+                ray,
                 best,
                 &mut mailbox,
                 self.mailbox,

@@ -14,9 +14,8 @@
 //! found.
 
 use crate::{KdTree, MAX_DEPTH, Node};
-use rt_core::leaf::{self, LeafRay};
 use rt_core::trace::{self, Event, Place, Take};
-use rt_core::{Hit, Mailbox, Primitive, Ray, SLAB_FAR_SCALE, Stack, Stats};
+use rt_core::{Hit, Mailbox, Primitive, Ray, SLAB_FAR_SCALE, Stack, Stats, leaf};
 
 /// Mailbox slots per ray: the last this many primitives tested are not tested again.
 const MAILBOX: usize = 8;
@@ -113,7 +112,7 @@ impl<P: Primitive> KdTree<P> {
     fn test_leaf<S: Stats, const ANY: bool>(
         &self,
         node: &Node,
-        ray: &LeafRay<'_>,
+        ray: &Ray,
         best: &mut Hit,
         mailbox: &mut Mailbox<MAILBOX>,
         stats: &mut S,
@@ -175,7 +174,6 @@ impl<P: Primitive> KdTree<P> {
         let mut stack = Stack::<(u32, f32, f32), MAX_DEPTH>::new();
         let mut current = 0;
         let mut mailbox = Mailbox::new();
-        let leaf_ray = LeafRay::new(ray);
         loop {
             stats.node_visit();
             let node = &nodes[current];
@@ -210,7 +208,7 @@ impl<P: Primitive> KdTree<P> {
                 };
                 continue;
             }
-            if self.test_leaf::<S, ANY>(node, &leaf_ray, best, &mut mailbox, stats) {
+            if self.test_leaf::<S, ANY>(node, ray, best, &mut mailbox, stats) {
                 return true;
             }
             loop {
@@ -256,7 +254,6 @@ impl<P: Primitive> KdTree<P> {
         let mut exit_node = usize::MAX;
         let mut restarted = false;
         let mut mailbox = Mailbox::new();
-        let leaf_ray = LeafRay::new(ray);
         loop {
             let mut current = top;
             let mut t1 = t_end;
@@ -311,7 +308,7 @@ impl<P: Primitive> KdTree<P> {
                 }
                 current = next;
             }
-            if self.test_leaf::<S, ANY>(&nodes[current], &leaf_ray, &mut best, &mut mailbox, stats)
+            if self.test_leaf::<S, ANY>(&nodes[current], ray, &mut best, &mut mailbox, stats)
                 || t1 >= t_end
                 || t1 > best.t * SLAB_FAR_SCALE
             {

@@ -40,9 +40,8 @@ use crate::Octree;
 use crate::builder::MAX_DEPTH;
 use crate::node::{Block, Node};
 use rt_core::glam::{BVec3A, Vec3A};
-use rt_core::leaf::{self, LeafRay};
 use rt_core::trace::{self, Event, Place};
-use rt_core::{Aabb, Hit, Mailbox, NEAR_TIE, Primitive, Ray, SLAB_FAR_SCALE, Stack, Stats};
+use rt_core::{Aabb, Hit, Mailbox, NEAR_TIE, Primitive, Ray, SLAB_FAR_SCALE, Stack, Stats, leaf};
 
 /// Mailbox slots per ray: the last this many primitives tested are not tested again.
 pub(crate) const MAILBOX: usize = 8;
@@ -298,12 +297,11 @@ impl<P: Primitive> Octree<P> {
         }
         let mut best = leaf::no_hit(ray.t_max);
         let mut mailbox = Mailbox::<MAILBOX>::new();
-        let leaf_ray = LeafRay::new(ray);
         let mut test = |node: &Node, best: &mut Hit, stats: &mut S| {
             leaf::test_primitives::<P, S, ANY, MAILBOX>(
                 &self.prims,
                 &self.refs[node.references()],
-                &leaf_ray,
+                ray,
                 best,
                 &mut mailbox,
                 self.mailbox,

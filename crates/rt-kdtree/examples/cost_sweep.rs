@@ -49,18 +49,17 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "K_T 25, 3 bad refines, depth 7+",
             KdParams {
                 empty_cut: 0.0,
-                leaf_size: 0,
                 ..KdParams::sah()
             },
         ),
+        ("  with empty cut 0.25 (sah)", KdParams::sah()),
         (
-            "  with empty cut 0.25",
+            "  with leaf size 3",
             KdParams {
-                leaf_size: 0,
+                leaf_size: 3,
                 ..KdParams::sah()
             },
         ),
-        ("  with leaf size 3 (sah)", KdParams::sah()),
     ];
     println!(
         "{:<32} {:>9} {:>5} {:>9} {:>10} {:>9} {:>8} {:>8}",

@@ -87,14 +87,16 @@
 //! ([`KdParams::wald_havran`]: K_T 15, depth `8 + 1.3 · log2 N`) price every node down to one
 //! primitive. The default ([`KdParams::sah`]) lets a path take up to three non-improving splits,
 //! which finds the splits that pay off two levels down, while a higher K_T and one level less of
-//! depth keep the tree from growing where they do not. Two rules then trade a few primitive
-//! tests for a smaller tree that builds and traces faster: wide empty slabs are cut off without
-//! pricing, and a node of at most three primitives prices no plane (`leaf_size`). Pricing the
+//! depth keep the tree from growing where they do not; cutting off wide empty slabs without
+//! pricing pays for most of the extra build time. The default prices every node down to one
+//! primitive, which keeps its promise of fewer primitive tests per ray than the binary SAH BVH.
+//! `leaf_size: 3` trades a few tests for a smaller tree that builds and traces faster: a node of
+//! at most three primitives prices no plane (its wide empty slabs are still cut off). Pricing the
 //! planes of a node of two or three primitives mostly adds levels of small cells, which a ray
-//! crosses in more steps than the tests they save. On the meshes measured, stopping at three was
-//! faster on every ray kind; stopping at four or more lost on some views. Lower
-//! `traversal_cost`, and `leaf_size` with it, when a primitive test is expensive compared with a
-//! traversal step (curved or displaced primitives).
+//! crosses in more steps than the tests they save; on the meshes measured, stopping at three was
+//! faster on every ray kind, and stopping at four or more lost on some views. Keep `leaf_size` at
+//! 0 and lower `traversal_cost` when a primitive test is expensive compared with a traversal step
+//! (curved or displaced primitives).
 //! `cargo run --release -p rt-kdtree --example cost_sweep` prints the trade-off (nodes, depth,
 //! references, visits and tests per ray, build time, speed) on the bunny.
 //!
@@ -184,9 +186,8 @@ impl KdParams {
     /// The default: Wald & Havran's cost model and perfect splits, with constants chosen for
     /// few primitive tests at a bounded build time (see "Choosing the constants" in the crate
     /// documentation): K_T = 25, K_I = 20, λ = 0.8 for an empty side, up to three splits that do
-    /// not lower the cost on a path, depth limit `7 + 1.3 · log2 N`, empty slabs wider than a
-    /// quarter of the cell cut off without pricing, and no plane priced for a node of at most
-    /// three primitives.
+    /// not lower the cost on a path, depth limit `7 + 1.3 · log2 N`, and empty slabs wider than a
+    /// quarter of the cell cut off without pricing.
     pub fn sah() -> Self {
         Self {
             traversal_cost: 25.0,
@@ -197,7 +198,7 @@ impl KdParams {
             max_depth: None,
             depth_base: 7.0,
             max_bad_refines: 3,
-            leaf_size: 3,
+            leaf_size: 0,
             parallel: true,
             traversal: Traversal::Stack,
         }
@@ -211,7 +212,6 @@ impl KdParams {
             empty_cut: 0.0,
             depth_base: 8.0,
             max_bad_refines: 0,
-            leaf_size: 0,
             ..Self::sah()
         }
     }

@@ -439,9 +439,9 @@ fn split<P: Primitive>(
         return Some((Children::InPlace(left, right), plane.axis, plane.pos));
     }
     // A small node keeps the empty-space cuts above (cheap, and they let rays skip its cell) but
-    // prices no plane. (PERF: leaf size 3 against the default 0, the bunny's single-threaded build 253 ->
-    // 205 ms, best of 9, and 823k -> 520k nodes; speed on six meshes, one thread: primary rays
-    // 1.02-1.10x, shadow 1.01-1.11x, incoherent 1.05-1.18x.)
+    // prices no plane. (PERF: leaf size 3 against the default 0, the bunny's single-threaded
+    // build 253 -> 205 ms, best of 9, and 823k -> 520k nodes; speed on six meshes, one thread:
+    // primary rays 1.02-1.10x, shadow 1.01-1.11x, incoherent 1.05-1.18x.)
     if task.count <= ctx.leaf_size {
         return None;
     }

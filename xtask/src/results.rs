@@ -32,7 +32,8 @@ pub struct Args {
 
 /// The rows every shootout table shows: each structure's default and the presets the guide
 /// discusses.
-const ROWS: &str = "bvh,bvh-binary,bvh-median,bvh-middle,kdtree,kdtree-restart,grid,hgrid,octree";
+const ROWS: &str =
+    "bvh,bvh-binary,bvh-median,bvh-middle,bvh-reinserted,kdtree,kdtree-restart,grid,hgrid,octree";
 
 /// One structure of each kind, for the tables that compare kinds.
 const MAIN_ROWS: &str = "bvh,kdtree,grid,hgrid,octree";

@@ -131,6 +131,7 @@ fn default_scene_json_has_every_field_and_no_mismatch() {
             "bvh-binary",
             "bvh-median",
             "bvh-middle",
+            "bvh-reinserted",
             "kdtree",
             "kdtree-wald-havran",
             "kdtree-restart",

@@ -12,6 +12,8 @@
 //! counts do not depend on the order they are combined in), and partitions run sequentially, so
 //! the tree is the same, byte for byte, whatever the number of threads.
 
+mod reinsert;
+
 use crate::node::{ChildRef, Node, PACK, TriPack, WIDTH, WideNode};
 use crate::{BvhParams, Layout, MAX_DEPTH, SplitMethod};
 use rt_core::glam::{Vec3, Vec3A};
@@ -255,13 +257,24 @@ pub(crate) fn build<G: Geometry + ?Sized>(prims: &G, params: &BvhParams) -> Buil
     let mut scratch = Scratch::new();
     plan_set(&ctx, &mut refs, &mut root, &mut scratch);
     let mut shape = Shape::default();
+    let planned = if params.reinsertion_passes > 0 && root.plan != Plan::Leaf {
+        reinsert::optimized(
+            &ctx,
+            &mut refs,
+            root,
+            params.reinsertion_passes,
+            &mut scratch,
+        )
+    } else {
+        Planned::new(root)
+    };
     if wide {
         let mut o = WideOut::default();
         let root_ref = emit_wide(
             &ctx,
             &mut refs,
             0,
-            Planned::new(root),
+            planned,
             &mut o,
             &mut shape,
             &mut scratch,
@@ -285,7 +298,7 @@ pub(crate) fn build<G: Geometry + ?Sized>(prims: &G, params: &BvhParams) -> Buil
             &ctx,
             &mut refs,
             0,
-            root,
+            planned,
             &mut nodes,
             &mut shape,
             &mut scratch,
@@ -1015,17 +1028,18 @@ struct Parted {
     right: (Bounds, Bounds),
 }
 
-/// Emits the binary subtree of `set` depth first (first child right after its parent). `refs`
-/// holds the references from absolute index `base` on.
+/// Emits the binary subtree of `planned` depth first (first child right after its parent).
+/// `refs` holds the references from absolute index `base` on.
 fn emit_binary<G: Geometry + ?Sized>(
     ctx: &Ctx<'_, G>,
     refs: &mut [PrimRef],
     base: usize,
-    set: Set,
+    planned: Planned,
     out: &mut Vec<Node>,
     shape: &mut Shape,
     scratch: &mut Scratch,
 ) {
+    let set = planned.set;
     shape.max_depth = shape.max_depth.max(set.depth);
     let index = out.len();
     if set.plan == Plan::Leaf {
@@ -1043,7 +1057,16 @@ fn emit_binary<G: Geometry + ?Sized>(
         Plan::Sah { axis, .. } => axis,
         _ => set.cbounds.longest_axis(),
     };
-    let (left, right) = split(ctx, refs, base, &set, scratch);
+    let (left, right) = match planned.below {
+        Some(below) => {
+            let [l, r] = *below;
+            (l, r)
+        }
+        None => {
+            let (l, r) = split(ctx, refs, base, &set, scratch);
+            (Planned::new(l), Planned::new(r))
+        }
+    };
     out.push(Node {
         bounds: set.bounds.to_aabb(),
         index: 0,
@@ -1051,15 +1074,16 @@ fn emit_binary<G: Geometry + ?Sized>(
         axis: axis as u8,
         pad: 0,
     });
-    if ctx.parallel && left.len().min(right.len()) >= PAR_SUBTREE_MIN {
-        let (lo, hi) = refs.split_at_mut(right.start - base);
-        let task = |refs: &mut [PrimRef], base: usize, s: Set| {
+    if ctx.parallel && left.set.len().min(right.set.len()) >= PAR_SUBTREE_MIN {
+        let right_start = right.set.start;
+        let (lo, hi) = refs.split_at_mut(right_start - base);
+        let task = |refs: &mut [PrimRef], base: usize, s: Planned| {
             let (mut v, mut sh) = (Vec::new(), Shape::default());
             emit_binary(ctx, refs, base, s, &mut v, &mut sh, &mut Scratch::new());
             (v, sh)
         };
         let ((lv, ls), (rv, rs)) =
-            par::join(|| task(lo, base, left), || task(hi, right.start, right));
+            par::join(|| task(lo, base, left), || task(hi, right_start, right));
         for (first, (v, s)) in [(true, (lv, ls)), (false, (rv, rs))] {
             let offset = out.len() as u32;
             if !first {

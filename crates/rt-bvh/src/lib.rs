@@ -20,7 +20,11 @@
 //!   between. One SIMD slab test handles all children of a node; triangles sit in leaves as
 //!   [`TriPack`]s of four, one SIMD triangle test per pack ("pre-processed triangles", memory
 //!   laid out by rate of access: the boxes a ray tests at every step, the triangles only in
-//!   leaves).
+//!   leaves).//! - **Reinserted** (preset `reinserted`, either layout with
+//!   [`BvhParams::reinsertion_passes`]): before the splits become nodes, the subtrees with the
+//!   largest boxes are taken out one at a time and put back where they add the least area
+//!   (Bittner, Hapala & Havran 2013), keeping every leaf. A top-down build never revisits a
+//!   split; this repairs the ones made near the root where large and small triangles mix.
 //!
 //! # Layouts in bytes
 //! - [`Node`] (binary): 32 bytes — its box (24), second child or first primitive (4), primitive
@@ -272,6 +276,11 @@ pub struct BvhParams {
     /// wide triangle packs and `1..=8` for other primitives in the wide layout. SAH may stop
     /// earlier when splitting does not pay; median and middle split until they reach it.
     pub max_leaf_size: u32,
+    /// Passes of reinsertion over the split tree before it becomes nodes (Bittner et al. 2013):
+    /// each moves the tenth of the subtrees with the largest boxes to where they add the least
+    /// area, keeping every leaf as it is; passes stop early once one gains less than 0.1%.
+    /// 0 (the default) for none. The tree is the same whatever the number of threads.
+    pub reinsertion_passes: u32,
     /// Build large subtrees on rayon's threads. The tree is the same either way.
     pub parallel: bool,
     /// Force the kernels of a wide tree; `None`, or kernels this CPU cannot run, picks the
@@ -325,6 +334,7 @@ impl BvhParams {
             traversal_cost: 0.7,
             intersection_cost: 1.0,
             max_leaf_size: 8,
+            reinsertion_passes: 0,
             parallel: true,
             kernels: None,
             ablation: Ablation::default(),
@@ -337,6 +347,18 @@ impl BvhParams {
         Self {
             layout: Layout::Binary,
             traversal_cost: 1.0,
+            ..Self::wide()
+        }
+    }
+
+    /// [`wide`](Self::wide), with three passes of reinsertion: the same leaves, with subtrees
+    /// moved to where they add the least area. It pays where triangle sizes vary widely (a
+    /// teapot in a stadium) and costs about twice the build time; on scanned meshes of even
+    /// triangles the binned tree is already close to what reinsertion finds. The results page
+    /// (`docs/results.md`, see [Measurements](crate#measurements)) has a row for each.
+    pub fn reinserted() -> Self {
+        Self {
+            reinsertion_passes: 3,
             ..Self::wide()
         }
     }
@@ -743,6 +765,7 @@ impl<P: Primitive> Accel for Bvh<P> {
             ("binary", BvhParams::sah()),
             ("median", BvhParams::median()),
             ("middle", BvhParams::middle()),
+            ("reinserted", BvhParams::reinserted()),
         ]
     }
 

@@ -39,6 +39,15 @@ rt_conformance::conformance_tests!(
 rt_conformance::conformance_tests!(binary, Bvh<Triangle>, BvhParams::sah());
 rt_conformance::conformance_tests!(median, Bvh<Triangle>, BvhParams::median());
 rt_conformance::conformance_tests!(middle, Bvh<Triangle>, BvhParams::middle());
+rt_conformance::conformance_tests!(reinserted, Bvh<Triangle>, BvhParams::reinserted());
+rt_conformance::conformance_tests!(
+    binary_reinserted,
+    Bvh<Triangle>,
+    BvhParams {
+        reinsertion_passes: 3,
+        ..BvhParams::sah()
+    }
+);
 
 #[test]
 fn spheres() {

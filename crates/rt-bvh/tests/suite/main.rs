@@ -9,3 +9,4 @@ mod instances;
 mod kernels;
 mod parallel;
 mod refit;
+mod reinsertion;

@@ -17,12 +17,13 @@
 //! already add, and a node whose ancestors alone add more than the best place found (plus the
 //! least any new parent can add, the area of `N`) is not expanded.
 //!
-//! Everything here runs on one thread, in an order fixed by the tree: the optimised tree does not
-//! depend on the number of threads.
+//! The split tree grows in parallel like the build; the moves run on one thread, in an order
+//! fixed by the tree, so the optimised tree does not depend on the number of threads.
 
-use super::{Bounds, Ctx, Plan, Planned, PrimRef, Scratch, Set, split};
+use super::{Bounds, Ctx, PAR_SUBTREE_MIN, Plan, Planned, PrimRef, Scratch, Set, split};
 use crate::MAX_DEPTH;
 use rt_core::Geometry;
+use rt_core::par;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
 
@@ -75,7 +76,7 @@ pub(super) fn optimized<G: Geometry + ?Sized>(
         root: 0,
         queue: BinaryHeap::new(),
     };
-    grow(ctx, refs, root, NONE, &mut tree.nodes, scratch);
+    grow(ctx, refs, 0, root, NONE, &mut tree.nodes, scratch);
     let before = tree.nodes.clone();
     tree.optimize(passes);
     if tree.depth() > MAX_DEPTH {
@@ -89,10 +90,15 @@ pub(super) fn optimized<G: Geometry + ?Sized>(
 }
 
 /// Appends the split tree of `set` to `nodes`, its root's parent being `parent`; returns the
-/// root's index.
+/// root's index. `refs` holds the references from absolute index `base` on.
+///
+/// Nodes are appended depth first, a node's left subtree before its right one. Large halves
+/// grow on rayon's threads into arrays of their own, appended in that same order, so the
+/// indices (and with them the optimisation's order) do not depend on threading.
 fn grow<G: Geometry + ?Sized>(
     ctx: &Ctx<'_, G>,
     refs: &mut [PrimRef],
+    base: usize,
     set: Set,
     parent: u32,
     nodes: &mut Vec<Node>,
@@ -105,10 +111,40 @@ fn grow<G: Geometry + ?Sized>(
         kids: [NONE; 2],
         range: (set.start as u32, set.end as u32),
     });
-    if set.plan != Plan::Leaf {
-        let (left, right) = split(ctx, refs, 0, &set, scratch);
-        let l = grow(ctx, refs, left, index, nodes, scratch);
-        let r = grow(ctx, refs, right, index, nodes, scratch);
+    if set.plan == Plan::Leaf {
+        return index;
+    }
+    let (left, right) = split(ctx, refs, base, &set, scratch);
+    if ctx.parallel && left.len().min(right.len()) >= PAR_SUBTREE_MIN {
+        let (lo, hi) = refs[set.start - base..set.end - base].split_at_mut(right.start - set.start);
+        let alone = |refs: &mut [PrimRef], base: usize, s: Set| {
+            let mut own = Vec::new();
+            grow(ctx, refs, base, s, NONE, &mut own, &mut Scratch::new());
+            own
+        };
+        let (l, r) = par::join(
+            || alone(lo, set.start, left),
+            || alone(hi, right.start, right),
+        );
+        let kids = [l, r].map(|part| {
+            let shift = nodes.len() as u32;
+            nodes.extend(part.into_iter().map(|mut n| {
+                n.parent = if n.parent == NONE {
+                    index
+                } else {
+                    n.parent + shift
+                };
+                if !n.is_leaf() {
+                    n.kids = n.kids.map(|k| k + shift);
+                }
+                n
+            }));
+            shift
+        });
+        nodes[index as usize].kids = kids;
+    } else {
+        let l = grow(ctx, refs, base, left, index, nodes, scratch);
+        let r = grow(ctx, refs, base, right, index, nodes, scratch);
         nodes[index as usize].kids = [l, r];
     }
     index

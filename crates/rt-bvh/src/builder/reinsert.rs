@@ -63,7 +63,7 @@ const MIN_GAIN: f64 = 1e-3;
 
 /// Builds the full split tree of `root` (planned), optimises it with up to `passes` passes, and
 /// returns it as a planned set whose splits are all made, over `refs` reordered to match. The
-/// tree is the unoptimised one if the moves would have made it deeper than [`MAX_DEPTH`].
+/// tree is the unoptimised one if the moves would have made a leaf as deep as [`MAX_DEPTH`].
 pub(super) fn optimized<G: Geometry + ?Sized>(
     ctx: &Ctx<'_, G>,
     refs: &mut Vec<PrimRef>,
@@ -79,7 +79,8 @@ pub(super) fn optimized<G: Geometry + ?Sized>(
     grow(ctx, refs, 0, root, NONE, &mut tree.nodes, scratch);
     let before = tree.nodes.clone();
     tree.optimize(passes);
-    if tree.depth() > MAX_DEPTH {
+    // The build keeps every depth below MAX_DEPTH (see `plan`), and so must the moves.
+    if tree.depth() >= MAX_DEPTH {
         tree.nodes = before;
         tree.root = 0;
     }
@@ -318,9 +319,9 @@ impl Tree {
                 unique: true,
             });
         }
-        // The children in the order a split gives them: the lower along the box's longest axis
-        // first. A move leaves them in any order, and the any-hit walk visits children in lane
-        // order.
+        // The children in the order a split gives them: along the axis on which their centres
+        // lie farthest apart, the lower one first. A move leaves them in any order, and the
+        // any-hit walk visits children in lane order.
         let centre = |k: u32| {
             let b = self.nodes[k as usize].bounds;
             b.min + b.max

@@ -134,13 +134,20 @@ impl Set {
     }
 }
 
-/// The output of a build.
+/// The output of a build: the tree, and its primitives in leaf order (for trees whose leaves
+/// are not triangle packs).
 pub(crate) struct Built<P> {
+    pub tree: Tree,
+    pub prims: Vec<P>,
+}
+
+/// The tree a build makes, whatever the primitive type.
+pub(crate) struct Tree {
     pub binary: Vec<Node>,
     pub wide: Vec<WideNode>,
     pub packs: Vec<TriPack>,
     pub test: Option<TriangleTest>,
-    pub prims: Vec<P>,
+    /// The input indices of the leaves' primitives, in leaf order (empty for packs).
     pub ids: Vec<u32>,
     pub max_depth: usize,
     pub leaves: usize,
@@ -150,9 +157,38 @@ pub(crate) struct Built<P> {
     pub stored: usize,
 }
 
+/// What the build reads of the primitives once their references are made: the vertices of a
+/// triangle, for the packs and for finding copies ([`dedup`]).
+///
+/// The build reaches the primitives through this trait object rather than a type parameter, so
+/// that everything after [`make_refs`] is compiled once, in this crate, and not again for every
+/// primitive and geometry type a program builds trees of (with rayon's machinery for each of
+/// its parallel calls): rt-bvh's test suite compiles 586k lines of LLVM IR instead of 1.0M, and
+/// a program that builds and traces one tree (the `large` example, release) in 8.5–9.6 s
+/// instead of 10.3–10.6 s. PERF: the build's time did not move (new ÷ old, one thread, medians
+/// of five processes: bunny 1.017, teapot 1.007, sphereflake 1.025, teapot in a stadium 1.011).
+trait Triangles: Sync {
+    /// The triangle of input index `id`, which the references say is one.
+    fn triangle(&self, id: u32) -> Triangle;
+}
+
+/// A geometry as [`Triangles`].
+struct Source<'a, G: ?Sized>(&'a G);
+
+impl<G: Geometry + ?Sized> Triangles for Source<'_, G> {
+    fn triangle(&self, id: u32) -> Triangle {
+        let (t, _) = self
+            .0
+            .prim(id as usize)
+            .as_triangle()
+            .expect("the references say this primitive is a triangle");
+        t
+    }
+}
+
 /// Build settings derived from the parameters and the input.
-struct Ctx<'a, G: ?Sized> {
-    prims: &'a G,
+struct Ctx<'a> {
+    prims: &'a dyn Triangles,
     split: SplitMethod,
     bins: usize,
     traversal_cost: f32,
@@ -184,16 +220,24 @@ const PAR_SUBTREE_MIN: usize = 1 << 11;
 /// at worst. Scratch memory: the 32-byte references and, per task, two bin arrays and a
 /// partition buffer of up to [`CHUNKED_PARTITION_MIN`] references (512 KB).
 pub(crate) fn build<G: Geometry + ?Sized>(prims: &G, params: &BvhParams) -> Built<G::Prim> {
-    let wide = params.layout == Layout::Wide;
     // PERF: below PAR_BUILD_MIN primitives the parallel build's overhead outweighs its gain
     // (teapot, 6,320 triangles: 1.1 ms sequential, 1.2 ms on 2 threads).
     let parallel = params.parallel && par::threads() > 1 && prims.len() >= PAR_BUILD_MIN;
+    let refs = make_refs(prims, parallel);
+    let tree = build_refs(&Source(prims), refs, params, parallel);
+    let prims = tree.ids.iter().map(|&id| prims.prim(id as usize)).collect();
+    Built { tree, prims }
+}
+
+/// [`build`] from the references on: everything that does not depend on the primitive type.
+fn build_refs(prims: &dyn Triangles, refs: Refs, params: &BvhParams, parallel: bool) -> Tree {
+    let wide = params.layout == Layout::Wide;
     let Refs {
         mut refs,
         tests,
         bounds,
         cbounds,
-    } = make_refs(prims, parallel);
+    } = refs;
     // Triangle packs when the wide tree is asked for and every valid primitive is a triangle
     // with the same test.
     let test = match tests {
@@ -220,12 +264,11 @@ pub(crate) fn build<G: Geometry + ?Sized>(prims: &G, params: &BvhParams) -> Buil
         parallel,
     };
     let valid = refs.len();
-    let mut out = Built {
+    let mut out = Tree {
         binary: Vec::new(),
         wide: Vec::new(),
         packs: Vec::new(),
         test,
-        prims: Vec::new(),
         ids: Vec::new(),
         max_depth: 0,
         leaves: 0,
@@ -312,7 +355,6 @@ pub(crate) fn build<G: Geometry + ?Sized>(prims: &G, params: &BvhParams) -> Buil
         if !wide {
             compact_binary(&mut out.binary, &mut refs);
         }
-        out.prims = refs.iter().map(|r| prims.prim(r.id as usize)).collect();
         out.ids = refs.iter().map(|r| r.id).collect();
     }
     out.stored = if test.is_some() {
@@ -414,6 +456,17 @@ fn make_refs<G: Geometry + ?Sized>(prims: &G, parallel: bool) -> Refs {
             pad: kind,
         }
     };
+    let refs: Vec<PrimRef> = if parallel {
+        par::map_range(0..n, make)
+    } else {
+        (0..n).map(make).collect()
+    };
+    summarize(refs, parallel)
+}
+
+/// The part of [`make_refs`] that does not depend on the primitive type: what the references
+/// say of `as_triangle`, their bounds, and the invalid ones dropped.
+fn summarize(refs: Vec<PrimRef>, parallel: bool) -> Refs {
     let summary = |c: &[PrimRef]| {
         let mut s = Refs {
             refs: Vec::new(),
@@ -447,17 +500,13 @@ fn make_refs<G: Geometry + ?Sized>(prims: &G, parallel: bool) -> Refs {
         };
         (r, ia + ib)
     };
-    let (refs, (mut all, invalid)) = if parallel {
-        let refs: Vec<PrimRef> = par::map_range(0..n, make);
-        let s = par::map_chunks(&refs, REFS_CHUNK, summary)
+    let (mut all, invalid) = if parallel {
+        par::map_chunks(&refs, REFS_CHUNK, summary)
             .into_iter()
             .reduce(merge)
-            .unwrap_or_else(|| summary(&[]));
-        (refs, s)
+            .unwrap_or_else(|| summary(&[]))
     } else {
-        let refs: Vec<PrimRef> = (0..n).map(make).collect();
-        let s = summary(&refs);
-        (refs, s)
+        summary(&refs)
     };
     all.refs = refs;
     if invalid > 0 {
@@ -622,13 +671,7 @@ fn ceil_log2(n: usize) -> usize {
 /// leaf size for its four-triangle leaves). A set too big for a leaf whose centres coincide is
 /// split by count, and so is any set once the remaining depth budget only just fits a balanced
 /// split: that keeps every tree within [`MAX_DEPTH`], the traversal stacks' bound.
-fn plan<G: ?Sized>(
-    ctx: &Ctx<'_, G>,
-    refs: &[PrimRef],
-    base: usize,
-    set: &Set,
-    scratch: &mut Scratch,
-) -> Plan {
+fn plan(ctx: &Ctx<'_>, refs: &[PrimRef], base: usize, set: &Set, scratch: &mut Scratch) -> Plan {
     let n = set.len();
     // One pack is one test however it is split, and splitting it pays only when its two parts'
     // boxes are far smaller than its own, which scanned and modelled meshes almost never show.
@@ -738,12 +781,7 @@ fn plan<G: ?Sized>(
 /// Plans `set`, whose references are exactly `refs`: first, if its box centres all coincide
 /// and it is too big for a leaf, it drops bit-identical copies of its triangles ([`dedup`]),
 /// which shortens it; then [`plan`].
-fn plan_set<G: Geometry + ?Sized>(
-    ctx: &Ctx<'_, G>,
-    refs: &mut [PrimRef],
-    set: &mut Set,
-    scratch: &mut Scratch,
-) {
+fn plan_set(ctx: &Ctx<'_>, refs: &mut [PrimRef], set: &mut Set, scratch: &mut Scratch) {
     if ctx.triangles
         && !set.unique
         && set.len() > ctx.max_leaf
@@ -767,13 +805,9 @@ fn plan_set<G: Geometry + ?Sized>(
 /// visits, 10 ms. Copies pile up in sets whose box centres coincide, which is the only place
 /// this looks. Triangles with the same vertices in another order are not copies: their answers
 /// may differ in the last bit.
-fn dedup<G: Geometry + ?Sized>(ctx: &Ctx<'_, G>, refs: &mut [PrimRef]) -> usize {
+fn dedup(ctx: &Ctx<'_>, refs: &mut [PrimRef]) -> usize {
     let key = |r: &PrimRef| {
-        let (t, _) = ctx
-            .prims
-            .prim(r.id as usize)
-            .as_triangle()
-            .expect("dedup runs on triangles only");
+        let t = ctx.prims.triangle(r.id);
         let bits = [t.v0, t.v1, t.v2].map(|v| v.to_array().map(f32::to_bits));
         (bits, r.id)
     };
@@ -790,8 +824,8 @@ fn dedup<G: Geometry + ?Sized>(ctx: &Ctx<'_, G>, refs: &mut [PrimRef]) -> usize 
 
 /// Splits `set` by its plan (not [`Plan::Leaf`]), reordering its references, and plans both
 /// halves.
-fn split<G: Geometry + ?Sized>(
-    ctx: &Ctx<'_, G>,
+fn split(
+    ctx: &Ctx<'_>,
     refs: &mut [PrimRef],
     base: usize,
     set: &Set,
@@ -1030,8 +1064,8 @@ struct Parted {
 
 /// Emits the binary subtree of `planned` depth first (first child right after its parent).
 /// `refs` holds the references from absolute index `base` on.
-fn emit_binary<G: Geometry + ?Sized>(
-    ctx: &Ctx<'_, G>,
+fn emit_binary(
+    ctx: &Ctx<'_>,
     refs: &mut [PrimRef],
     base: usize,
     planned: Planned,
@@ -1139,8 +1173,8 @@ const PRESPLIT_LEVELS: usize = 3;
 /// time, the root of the sphereflake kept one thread busy for 1.9 ms before its children could
 /// be built in parallel; the 2-thread build was 1.46x faster than one thread, the binary tree's
 /// (whose two halves run in parallel from the root on) 1.73x.
-fn presplit<G: Geometry + ?Sized>(
-    ctx: &Ctx<'_, G>,
+fn presplit(
+    ctx: &Ctx<'_>,
     refs: &mut [PrimRef],
     base: usize,
     set: Set,
@@ -1174,8 +1208,8 @@ fn presplit<G: Geometry + ?Sized>(
 /// Emits the wide subtree of `planned` and returns the reference to it: a leaf, or a node whose
 /// children are the sets left after splitting the largest child until there are eight. `refs`
 /// holds the references from absolute index `base` on.
-fn emit_wide<G: Geometry + ?Sized>(
-    ctx: &Ctx<'_, G>,
+fn emit_wide(
+    ctx: &Ctx<'_>,
     refs: &mut [PrimRef],
     base: usize,
     planned: Planned,
@@ -1277,11 +1311,7 @@ fn emit_wide<G: Geometry + ?Sized>(
 ///
 /// PERF: appending the root's eight subtrees one after another (4.2 MB for the sphereflake)
 /// took 0.43 ms on one thread while the other waited.
-fn append_all<G: ?Sized>(
-    ctx: &Ctx<'_, G>,
-    out: &mut WideOut,
-    parts: Vec<(ChildRef, WideOut)>,
-) -> Vec<ChildRef> {
+fn append_all(ctx: &Ctx<'_>, out: &mut WideOut, parts: Vec<(ChildRef, WideOut)>) -> Vec<ChildRef> {
     // Where each part's nodes and packs start.
     let mut node_base = Vec::with_capacity(parts.len());
     let mut pack_base = Vec::with_capacity(parts.len());
@@ -1331,23 +1361,14 @@ fn append_all<G: ?Sized>(
 }
 
 /// A leaf: its triangles packed four to a pack, or its range of references.
-fn emit_leaf<G: Geometry + ?Sized>(
-    ctx: &Ctx<'_, G>,
-    range: &[PrimRef],
-    set: &Set,
-    out: &mut WideOut,
-) -> ChildRef {
+fn emit_leaf(ctx: &Ctx<'_>, range: &[PrimRef], set: &Set, out: &mut WideOut) -> ChildRef {
     match ctx.test {
         Some(test) => {
             let first = out.packs.len();
             for chunk in range.chunks(PACK) {
                 let mut tris = [(Triangle::new(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO), 0u32); PACK];
                 for (slot, r) in tris.iter_mut().zip(chunk) {
-                    let (t, _) = ctx
-                        .prims
-                        .prim(r.id as usize)
-                        .as_triangle()
-                        .expect("every primitive of a packed tree is a triangle");
+                    let t = ctx.prims.triangle(r.id);
                     *slot = (t, r.id);
                 }
                 out.packs.push(TriPack::new(&tris[..chunk.len()], test));

@@ -780,11 +780,8 @@ impl<P: Primitive> Accel for Bvh<P> {
         geometry: &G,
         params: &BvhParams,
     ) -> Self {
-        let b = builder::build(geometry, params);
-        let items = Items {
-            prims: b.prims,
-            ids: b.ids,
-        };
+        let builder::Built { tree: b, prims } = builder::build(geometry, params);
+        let items = Items { prims, ids: b.ids };
         let tree = match params.layout {
             Layout::Binary => Tree::Binary {
                 nodes: b.binary,

@@ -22,7 +22,6 @@
 
 use super::{Bounds, Ctx, PAR_SUBTREE_MIN, Plan, Planned, PrimRef, Scratch, Set, split};
 use crate::MAX_DEPTH;
-use rt_core::Geometry;
 use rt_core::par;
 use std::cmp::Reverse;
 use std::collections::BinaryHeap;
@@ -64,8 +63,8 @@ const MIN_GAIN: f64 = 1e-3;
 /// Builds the full split tree of `root` (planned), optimises it with up to `passes` passes, and
 /// returns it as a planned set whose splits are all made, over `refs` reordered to match. The
 /// tree is the unoptimised one if the moves would have made a leaf as deep as [`MAX_DEPTH`].
-pub(super) fn optimized<G: Geometry + ?Sized>(
-    ctx: &Ctx<'_, G>,
+pub(super) fn optimized(
+    ctx: &Ctx<'_>,
     refs: &mut Vec<PrimRef>,
     root: Set,
     passes: u32,
@@ -96,8 +95,8 @@ pub(super) fn optimized<G: Geometry + ?Sized>(
 /// Nodes are appended depth first, a node's left subtree before its right one. Large halves
 /// grow on rayon's threads into arrays of their own, appended in that same order, so the
 /// indices (and with them the optimisation's order) do not depend on threading.
-fn grow<G: Geometry + ?Sized>(
-    ctx: &Ctx<'_, G>,
+fn grow(
+    ctx: &Ctx<'_>,
     refs: &mut [PrimRef],
     base: usize,
     set: Set,

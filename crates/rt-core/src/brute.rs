@@ -14,9 +14,9 @@ pub struct BruteForce<P: Primitive> {
     bounds: Aabb,
 }
 
-/// The bundle queries' loop: `answer(slot, hit)` for every ray of `rays` (with `ANY`, `Some`
-/// when the ray is blocked).
 impl<P: Primitive> BruteForce<P> {
+    /// The bundle queries' loop: `answer(slot, hit)` for every ray of `rays` (with `ANY`,
+    /// `Some` when the ray is blocked).
     fn bundles<S: Stats, const ANY: bool>(
         &self,
         rays: &[Ray],

@@ -186,8 +186,54 @@ pub(crate) struct Built {
     pub valid_prims: usize,
 }
 
-struct Ctx<'a, P> {
-    prims: &'a [P],
+/// What the build asks of a primitive once its events are made: its box, and its parts on
+/// either side of a plane within a cell (perfect splits).
+///
+/// The build reaches the primitives through this trait object rather than a type parameter, so
+/// that it is compiled once, in this crate, and not again for every primitive type a program
+/// builds trees of (with rayon's machinery for its parallel calls). It is called for the
+/// primitives a split straddles, each clip of which costs far more than the call.
+trait Parts: Sync {
+    /// How many primitives there are (valid or not).
+    fn len(&self) -> usize;
+    /// Primitive `id`'s box ([`Primitive::bounds`]).
+    fn bounds(&self, id: u32) -> Aabb;
+    /// Primitive `id`'s parts below and above `pos` on `axis` within `cell`
+    /// ([`Primitive::split_bounds`]).
+    fn split_bounds(
+        &self,
+        id: u32,
+        cell: &Aabb,
+        axis: usize,
+        pos: f32,
+    ) -> (Option<Aabb>, Option<Aabb>);
+}
+
+/// A primitive slice as [`Parts`].
+struct Source<'a, P>(&'a [P]);
+
+impl<P: Primitive> Parts for Source<'_, P> {
+    fn len(&self) -> usize {
+        self.0.len()
+    }
+
+    fn bounds(&self, id: u32) -> Aabb {
+        self.0[id as usize].bounds()
+    }
+
+    fn split_bounds(
+        &self,
+        id: u32,
+        cell: &Aabb,
+        axis: usize,
+        pos: f32,
+    ) -> (Option<Aabb>, Option<Aabb>) {
+        self.0[id as usize].split_bounds(cell, axis, pos)
+    }
+}
+
+struct Ctx<'a> {
+    prims: &'a dyn Parts,
     kt: f32,
     ki: f32,
     empty_factor: f32,
@@ -199,9 +245,9 @@ struct Ctx<'a, P> {
     parallel: bool,
 }
 
-impl<'a, P> Ctx<'a, P> {
+impl<'a> Ctx<'a> {
     /// The build context for `valid` valid primitives among `prims`.
-    fn new(prims: &'a [P], params: &KdParams, valid: usize) -> Self {
+    fn new(prims: &'a dyn Parts, params: &KdParams, valid: usize) -> Self {
         Self {
             prims,
             kt: params.traversal_cost.max(0.0),
@@ -226,9 +272,15 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &KdParams) -> Built {
         prims.len() <= MAX_PRIMS,
         "a kd-tree holds at most 2^30 - 1 primitives"
     );
+    build_valid(&Source(prims), ids, params)
+}
+
+/// [`build`] from the valid primitives' indices on: everything that does not depend on the
+/// primitive type.
+fn build_valid(prims: &dyn Parts, ids: Vec<u32>, params: &KdParams) -> Built {
     let bounds = ids
         .iter()
-        .fold(Aabb::EMPTY, |b, &i| b.union(prims[i as usize].bounds()));
+        .fold(Aabb::EMPTY, |b, &i| b.union(prims.bounds(i)));
     let mut out = Built {
         bounds,
         valid_prims: ids.len(),
@@ -247,7 +299,7 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &KdParams) -> Built {
     // times the events at once, 48 bytes per triangle each.
     let mut sizes = [0usize; 3];
     for &id in &ids {
-        let b = prims[id as usize].bounds();
+        let b = prims.bounds(id);
         for (axis, size) in sizes.iter_mut().enumerate() {
             *size += if b.min[axis] == b.max[axis] { 1 } else { 2 };
         }
@@ -256,7 +308,7 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &KdParams) -> Built {
     let mut arena = vec![Event::ZERO; nx + ny + sizes[2]];
     let mut at = [0, nx, nx + ny];
     for &id in &ids {
-        let b = prims[id as usize].bounds();
+        let b = prims.bounds(id);
         for (axis, at) in at.iter_mut().enumerate() {
             for e in events(id, &b, axis) {
                 arena[*at] = e;
@@ -306,13 +358,7 @@ pub(crate) fn build<P: Primitive>(prims: &[P], params: &KdParams) -> Built {
 /// new lists of their own instead and frees its own, whether or not the two are then built in
 /// parallel. So the build holds the events of the tasks on its current paths and of their
 /// waiting siblings, about the root's events again, and never a stack of ancestors' lists.
-fn build_into<P: Primitive>(
-    ctx: &Ctx<'_, P>,
-    task: Task,
-    slot: usize,
-    out: &mut Built,
-    arena: &mut Vec<Event>,
-) {
+fn build_into(ctx: &Ctx<'_>, task: Task, slot: usize, out: &mut Built, arena: &mut Vec<Event>) {
     out.max_depth = out.max_depth.max(task.depth as usize);
     let detach = task.count >= PARALLEL_MIN_REFS;
     let Some((children, axis, pos)) = split(ctx, &task, arena, detach) else {
@@ -379,7 +425,7 @@ fn make_leaf(task: &Task, arena: &[Event], slot: usize, out: &mut Built) {
     out.refs[first..].sort_unstable();
 }
 
-fn subtree<P: Primitive>(ctx: &Ctx<'_, P>, task: Task, mut arena: Vec<Event>) -> Built {
+fn subtree(ctx: &Ctx<'_>, task: Task, mut arena: Vec<Event>) -> Built {
     let mut out = Built {
         nodes: vec![Node::leaf(0, 0)],
         ..Built::default()
@@ -425,8 +471,8 @@ enum Children {
 /// children's events replace the task's at the top of `arena`, unless the task is partitioned
 /// and `detach` asks for lists of their own. (A cut that leaves one side empty moves no event:
 /// the other child keeps the task's events where they are.)
-fn split<P: Primitive>(
-    ctx: &Ctx<'_, P>,
+fn split(
+    ctx: &Ctx<'_>,
     task: &Task,
     arena: &mut Vec<Event>,
     detach: bool,
@@ -465,7 +511,7 @@ fn split<P: Primitive>(
 /// of every node along a chain of such cuts. (PERF: with the default constants on the bunny,
 /// single-threaded, best of 9: build 326 -> 302 ms, 853k -> 823k nodes, 0.758 -> 0.764 primitive
 /// tests per primary ray.)
-fn empty_space<P>(ctx: &Ctx<'_, P>, task: &Task, arena: &[Event]) -> Option<Plane> {
+fn empty_space(ctx: &Ctx<'_>, task: &Task, arena: &[Event]) -> Option<Plane> {
     if ctx.empty_cut <= 0.0 {
         return None;
     }
@@ -509,7 +555,7 @@ fn empty_space<P>(ctx: &Ctx<'_, P>, task: &Task, arena: &[Event]) -> Option<Plan
 
 /// Whether a node of `n` primitives at `depth` may be split at all.
 #[inline]
-fn may_split<P>(ctx: &Ctx<'_, P>, n: usize, depth: u32) -> bool {
+fn may_split(ctx: &Ctx<'_>, n: usize, depth: u32) -> bool {
     n > 0 && depth < ctx.max_depth
 }
 
@@ -519,7 +565,7 @@ fn may_split<P>(ctx: &Ctx<'_, P>, n: usize, depth: u32) -> bool {
 /// Wald & Havran stop when no split beats the leaf; pbrt-v4 tolerates a few non-improving splits
 /// on a path, since a later split may still pay off.
 #[inline]
-fn accept<P>(ctx: &Ctx<'_, P>, n: usize, bad_refines: u32, plane: &Plane) -> Option<u32> {
+fn accept(ctx: &Ctx<'_>, n: usize, bad_refines: u32, plane: &Plane) -> Option<u32> {
     let leaf_cost = ctx.ki * n as f32;
     if plane.cost < leaf_cost {
         return Some(bad_refines);
@@ -532,7 +578,7 @@ fn accept<P>(ctx: &Ctx<'_, P>, n: usize, bad_refines: u32, plane: &Plane) -> Opt
 /// The sweep (Wald & Havran, Algorithm 4): per axis, walk the sorted events keeping the counts of
 /// primitives left of, in and right of the current plane, and price every plane strictly inside
 /// the cell.
-fn best_plane<P>(ctx: &Ctx<'_, P>, task: &Task, arena: &[Event]) -> Option<Plane> {
+fn best_plane(ctx: &Ctx<'_>, task: &Task, arena: &[Event]) -> Option<Plane> {
     let cell = &task.cell;
     let ext = cell.extent();
     let half_area = ext.x * ext.y + ext.y * ext.z + ext.z * ext.x;
@@ -613,8 +659,8 @@ fn key_bits(pos: f32) -> u32 {
 /// right of it; its cost is in units of K_I / A (`k` is K_T in those units).
 #[inline(always)]
 #[allow(clippy::too_many_arguments)]
-fn price<P>(
-    ctx: &Ctx<'_, P>,
+fn price(
+    ctx: &Ctx<'_>,
     k: f32,
     axis: usize,
     pos: f32,
@@ -642,7 +688,7 @@ fn price<P>(
 /// The cost, in units of K_I / A, of a split into children of half areas `al` and `ar` with `np`
 /// primitives in the plane, and the side those should go to. `k` is K_T in the same units.
 #[inline(always)]
-fn sah<P>(ctx: &Ctx<'_, P>, k: f32, al: f32, ar: f32, nl: u32, nr: u32, np: u32) -> (f32, bool) {
+fn sah(ctx: &Ctx<'_>, k: f32, al: f32, ar: f32, nl: u32, nr: u32, np: u32) -> (f32, bool) {
     let factor = |l: u32, r: u32| {
         if l == 0 || r == 0 {
             ctx.empty_factor
@@ -720,8 +766,8 @@ const BOTH: u8 = 3;
 /// Splits the task's events at `plane` (Wald & Havran, Algorithms 5 and 6), replacing them at
 /// the top of `arena` with the right child's events, then the left child's; or, if `detach`,
 /// writing each child's events to a list of its own of exactly their size.
-fn partition<P: Primitive>(
-    ctx: &Ctx<'_, P>,
+fn partition(
+    ctx: &Ctx<'_>,
     task: &Task,
     plane: Plane,
     bad_refines: u32,
@@ -791,7 +837,7 @@ fn partition<P: Primitive>(
         ns += usize::from(last & (verdict == BOTH));
     }
     for &prim in &straddlers[..ns] {
-        let (lb, rb) = clip_both(ctx, &ctx.prims[prim as usize], &task.cell, axis, pos, exact);
+        let (lb, rb) = clip_both(ctx, prim, &task.cell, axis, pos, exact);
         if let Some(b) = lb {
             push_events(lnew, prim, &b);
             lcount += 1;
@@ -910,16 +956,16 @@ fn merge(
 
 /// The parts of a straddling primitive in the two child cells: clipped exactly with perfect
 /// splits when `exact`, else its bounds cut to each cell.
-fn clip_both<P: Primitive>(
-    ctx: &Ctx<'_, P>,
-    prim: &P,
+fn clip_both(
+    ctx: &Ctx<'_>,
+    prim: u32,
     cell: &Aabb,
     axis: usize,
     pos: f32,
     exact: bool,
 ) -> (Option<Aabb>, Option<Aabb>) {
     let loose = || {
-        let b = prim.bounds().intersection(cell);
+        let b = ctx.prims.bounds(prim).intersection(cell);
         let (mut l, mut r) = (b, b);
         l.max[axis] = l.max[axis].min(pos);
         r.min[axis] = r.min[axis].max(pos);
@@ -928,7 +974,7 @@ fn clip_both<P: Primitive>(
     if !ctx.perfect || !exact {
         return loose();
     }
-    match prim.split_bounds(cell, axis, pos) {
+    match ctx.prims.split_bounds(prim, cell, axis, pos) {
         // The primitive was in the parent cell, so in exact arithmetic it meets a child; if
         // rounding lost it on both sides, keep the loose parts rather than drop it.
         (None, None) => loose(),
@@ -938,7 +984,7 @@ fn clip_both<P: Primitive>(
             // can put a part outside that box, where the primitive would be listed in cells it
             // misses (found by the `trace` fuzz target: `validate` failed). Keep each part
             // within the box; if nothing is left, that side's loose part decides.
-            let b = prim.bounds();
+            let b = ctx.prims.bounds(prim);
             // The loose parts are computed only if a part falls outside the box (rarely).
             let within = |part: Option<Aabb>, left: bool| {
                 part.and_then(|p| {
@@ -1038,14 +1084,14 @@ mod tests {
             bad_refines: 0,
         };
         let mut params = KdParams::sah();
-        let plane = empty_space(&Ctx::new(&tri, &params, 1), &task, &arena).unwrap();
+        let plane = empty_space(&Ctx::new(&Source(&tri[..]), &params, 1), &task, &arena).unwrap();
         // The flat triangle lies in the plane and stays with the non-empty (left) side.
         assert_eq!((plane.axis, plane.pos, plane.planar_left), (2, 0.1, true));
         assert_eq!((plane.left_count, plane.right_count), (1, 0));
         // No slab is that wide, or the heuristic is off: the SAH decides.
         params.empty_cut = 0.95;
-        assert!(empty_space(&Ctx::new(&tri, &params, 1), &task, &arena).is_none());
+        assert!(empty_space(&Ctx::new(&Source(&tri[..]), &params, 1), &task, &arena).is_none());
         params.empty_cut = 0.0;
-        assert!(empty_space(&Ctx::new(&tri, &params, 1), &task, &arena).is_none());
+        assert!(empty_space(&Ctx::new(&Source(&tri[..]), &params, 1), &task, &arena).is_none());
     }
 }

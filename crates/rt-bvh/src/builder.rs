@@ -163,10 +163,11 @@ pub(crate) struct Tree {
 /// The build reaches the primitives through this trait object rather than a type parameter, so
 /// that everything after [`make_refs`] is compiled once, in this crate, and not again for every
 /// primitive and geometry type a program builds trees of (with rayon's machinery for each of
-/// its parallel calls): rt-bvh's test suite compiles 586k lines of LLVM IR instead of 1.0M, and
-/// a program that builds and traces one tree (the `large` example, release) in 8.5–9.6 s
-/// instead of 10.3–10.6 s. PERF: the build's time did not move (new ÷ old, one thread, medians
-/// of five processes: bunny 1.017, teapot 1.007, sphereflake 1.025, teapot in a stadium 1.011).
+/// its parallel calls).
+// PERF: rt-bvh's test suite compiles 586k lines of LLVM IR instead of 1.0M, and a program that
+// builds and traces one tree (the `large` example, release) in 8.5–9.6 s instead of 10.3–10.6
+// s. The build's time did not move (new ÷ old, one thread, medians of five processes: bunny
+// 1.017, teapot 1.007, sphereflake 1.025, teapot in a stadium 1.011).
 trait Triangles: Sync {
     /// The triangle of input index `id`, which the references say is one.
     fn triangle(&self, id: u32) -> Triangle;

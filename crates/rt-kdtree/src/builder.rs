@@ -191,11 +191,11 @@ pub(crate) struct Built {
 ///
 /// The build reaches the primitives through this trait object rather than a type parameter, so
 /// that it is compiled once, in this crate, and not again for every primitive type a program
-/// builds trees of (with rayon's machinery for its parallel calls): rt-kdtree's test suite
-/// compiles 132k lines of LLVM IR instead of 155k. It is called for the primitives a split
-/// straddles, each clip of which costs far more than the call. PERF: the build's time did not
-/// move (new ÷ old, one thread, medians of six processes: bunny 1.000, teapot 1.002,
-/// sphereflake 1.008, teapot in a stadium 1.004).
+/// builds trees of (with rayon's machinery for its parallel calls). It is called for the
+/// primitives a split straddles, each clip of which costs far more than the call.
+// PERF: rt-kdtree's test suite compiles 132k lines of LLVM IR instead of 155k, and the build's
+// time did not move (new ÷ old, one thread, medians of six processes: bunny 1.000, teapot
+// 1.002, sphereflake 1.008, teapot in a stadium 1.004).
 trait Parts: Sync {
     /// How many primitives there are (valid or not).
     fn len(&self) -> usize;

@@ -456,8 +456,9 @@ impl DropsLane {
     }
 }
 
-/// The bundle check passes brute force (whose bundle queries loop over single rays) and fails
-/// a bundle traversal that drops a lane, naming the ray, the order and the bundle size.
+/// The bundle check passes brute force (whose bundle queries test each triangle against a
+/// bundle's lanes) and fails a bundle traversal that drops a lane, naming the ray, the order and
+/// the bundle size.
 #[test]
 fn a_bundle_traversal_that_drops_a_lane_fails() {
     let s = scene("shared_edge");

@@ -552,10 +552,11 @@ fn ply_and_gltf_files_run_and_broken_ones_are_one_line_errors() {
     }
 }
 
-/// Issue 15's closest-point acceptance: on every shared mesh, each structure's default preset
-/// answers 4,000 closest-point queries exactly as brute force does (all of them checked).
+/// Issue 15's closest-point acceptance, and issue 29's box overlap: on every shared mesh, each
+/// structure's default preset answers 4,000 closest-point queries and 1,000 box queries exactly
+/// as brute force does (all of them checked).
 #[test]
-fn closest_points_agree_with_brute_force_on_every_shared_mesh() {
+fn closest_points_and_box_overlaps_agree_with_brute_force_on_every_shared_mesh() {
     let Some(dir) = shared_meshes_dir() else {
         return;
     };
@@ -593,6 +594,35 @@ fn closest_points_agree_with_brute_force_on_every_shared_mesh() {
                 "no limit: every query finds a triangle; {r}"
             );
         }
+        let v = json(&compare(&[
+            "--scene",
+            mesh.to_str().unwrap(),
+            "--query",
+            "overlap",
+            "--structures",
+            "bvh,bvh-binary,kdtree,grid,hgrid,octree",
+            "--points",
+            "1000",
+            "--check-rays",
+            "1000",
+            "--box-size",
+            "0.03",
+            "--repeats",
+            "1",
+            "--json",
+        ]));
+        assert_eq!(v["query"], "overlap");
+        assert_eq!(v["checked_rays"], 1000, "{}", mesh.display());
+        let rows = v["results"].as_array().unwrap();
+        assert_eq!(rows.len(), 7);
+        for r in rows {
+            assert_eq!(r["mismatches"], 0, "{}: {r}", mesh.display());
+            let hits = r["hits"].as_u64().unwrap();
+            assert!(
+                hits > 200 && hits < 1000,
+                "boxes that meet the mesh and boxes that miss it; {r}"
+            );
+        }
     }
 }
 
@@ -601,6 +631,14 @@ fn closest_point_options_reject_bad_values_in_one_line() {
     assert_one_line_error(
         &compare(&["--query", "closest-point", "--points", "0"]),
         "--points must be at least 1",
+    );
+    assert_one_line_error(
+        &compare(&["--query", "overlap", "--box-size", "0"]),
+        "--box-size must be above 0 and at most 1",
+    );
+    assert_one_line_error(
+        &compare(&["--query", "overlap", "--out", "report-dir"]),
+        "--out writes a report of ray queries only; leave it out with --query overlap",
     );
     assert_one_line_error(
         &compare(&["--query", "closest-point", "--max-distance=-1"]),

@@ -202,6 +202,7 @@ mod instance;
 mod kernels;
 mod nearest;
 mod node;
+mod overlap;
 mod refit;
 mod regions;
 mod simd;
@@ -461,6 +462,9 @@ struct Input {
     invalid: Vec<u32>,
     /// Bit-identical copies of stored triangles, with the copy stored (usually none).
     copies: Vec<(u32, u32)>,
+    /// The same pairs the other way round, `(stored, copy)`, in ascending order: what a box
+    /// query looks up to report every copy of a stored triangle it finds.
+    twins: Vec<(u32, u32)>,
 }
 
 impl<P: Primitive> Bvh<P> {
@@ -892,6 +896,20 @@ impl<P: Primitive> Accel for Bvh<P> {
         }
     }
 
+    /// Every subtree whose box meets the query box (`overlap.rs`). Bit-identical copies of a
+    /// triangle, which the tree stores once, are offered with it.
+    fn box_query<Q: rt_core::BoxQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        if self.input.twins.is_empty() {
+            let _ = self.box_walk(query, stats);
+            return;
+        }
+        let mut with = overlap::WithCopies::new(query, &self.input.twins);
+        let _ = self.box_walk(&mut with, stats);
+        for _ in 0..with.offered() {
+            stats.prim_test();
+        }
+    }
+
     fn memory_bytes(&self) -> usize {
         let tree = match &self.tree {
             Tree::Binary { nodes, items } => {
@@ -908,7 +926,7 @@ impl<P: Primitive> Accel for Bvh<P> {
         size_of::<Self>()
             + tree
             + self.input.invalid.capacity() * size_of::<u32>()
-            + self.input.copies.capacity() * size_of::<(u32, u32)>()
+            + (self.input.copies.capacity() + self.input.twins.capacity()) * size_of::<(u32, u32)>()
     }
 
     fn regions(&self, visit: &mut dyn FnMut(rt_core::Region)) {

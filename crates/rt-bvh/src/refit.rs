@@ -63,6 +63,8 @@ pub(crate) fn left_out<P: Primitive, G: Geometry<Prim = P> + ?Sized>(
             None => input.invalid.push(i as u32),
         }
     }
+    input.twins = input.copies.iter().map(|&(copy, of)| (of, copy)).collect();
+    input.twins.sort_unstable();
     input
 }
 

@@ -18,7 +18,10 @@
 //! by smallest `t`, then smallest index), `t` within a relative 1e-5, and the same occlusion
 //! answer; for every closest-point query ([`scene_points`]: points on, near and far from the
 //! primitives, with and without a maximum distance), the same primitive and a distance within a
-//! relative 1e-5 ([`PointHit::agree`]); the answer must not change when statistics are counted;
+//! relative 1e-5 ([`PointHit::agree`]); for every box overlap query ([`scene_boxes`]: boxes
+//! that touch primitives, flat and point boxes on their vertices' planes, boxes at random, and
+//! boxes that meet nothing), the same list of primitives ([`compare_boxes`]); the answer must
+//! not change when statistics are counted;
 //! and the structure must report the number of valid primitives it kept. The bundle queries
 //! ([`Accel::intersect_bundle`], [`Accel::occluded_bundle`]) must give, ray for ray, the same
 //! bits as the single queries, whatever bundles the rays come in ([`compare_bundles`]).
@@ -44,9 +47,11 @@ use std::fmt;
 #[doc(hidden)]
 pub use rt_core;
 
+mod boxes;
 mod bundles;
 mod instances;
 mod refit;
+pub use boxes::{BoxMismatch, compare_boxes, scene_boxes};
 pub use bundles::{
     BUNDLE_SIZES, bundle_orders, check_coherent_bundles, check_coherent_bundles_on,
     compare_bundles, same_bits,
@@ -474,6 +479,9 @@ fn check_queries<A: Accel + 'static>(
             let points = scene_points(&prims, &rays);
             compare_points_probed(&accel, &reference, &points, probe)
                 .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
+            let boxes = scene_boxes(&prims, prims.len() as u64);
+            boxes::compare_boxes_probed(&accel, &reference, &boxes, probe)
+                .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
         }
         Ok(())
     })
@@ -505,6 +513,7 @@ enum Doing {
     Tracing(Ray),
     Bundle(Ray, usize),
     Point(Vec3, f32),
+    Box(rt_core::Aabb),
 }
 
 impl Probe {
@@ -539,6 +548,10 @@ impl Probe {
                 "a bundle query of {len} rays, the first {}\n  rays-file line: {}",
                 ray.to_rust(),
                 ray.to_line()
+            ),
+            Ok(Doing::Box(b)) => format!(
+                "overlapping(&Aabb::new(Vec3::new({:?}, {:?}, {:?}), Vec3::new({:?}, {:?}, {:?})))",
+                b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
             ),
             Ok(Doing::Point(p, max)) => format!(
                 "closest_point(Vec3::new({:?}, {:?}, {:?}), {max:?})",

@@ -1,7 +1,8 @@
 //! The trait every acceleration structure implements.
 
 use crate::{
-    Aabb, BallQuery, ClosestPointQuery, Geometry, NoStats, PointHit, Primitive, Ray, Stats,
+    Aabb, BallQuery, BoxQuery, ClosestPointQuery, Geometry, NoStats, OverlapQuery, PointHit,
+    Primitive, Ray, Stats,
 };
 use glam::Vec3;
 use std::fmt::Debug;
@@ -277,6 +278,68 @@ pub trait Accel: Sized + Send + Sync {
     #[inline]
     fn closest_point(&self, point: Vec3, max_distance: f32) -> Option<PointHit> {
         self.closest_point_with(point, max_distance, &mut NoStats)
+    }
+
+    /// Offers `query` every valid primitive that may meet its box: the one traversal behind box
+    /// overlap queries ([`overlapping`](Accel::overlapping), [`overlaps_any`](Accel::overlaps_any)).
+    ///
+    /// Contract: every valid primitive whose [`Primitive::overlaps_box`] is true for
+    /// `query.bounds()` is passed to [`BoxQuery::test`] (or [`BoxQuery::test_triangle`]) and
+    /// counted as a primitive test, until a test returns [`ControlFlow::Break`], after which
+    /// nothing more is offered. A box (or cell) may be skipped only when it does not meet the
+    /// query box ([`Aabb::overlaps`]: closed boxes, so touching counts). Primitives outside the
+    /// box may be offered too, and a primitive more than once. An empty or NaN query box is
+    /// offered nothing.
+    ///
+    /// The default runs [`ball_query`](Accel::ball_query) with the ball around the box, which
+    /// is correct for any structure whose ball query offers primitives through
+    /// [`BallQuery::test`], but offers everything in that ball: every structure of this
+    /// workspace overrides it to prune by the box itself. A structure whose ball query offers
+    /// pre-processed triangles by their edges must override it, since a vertex rebuilt from an
+    /// edge can differ from the vertex in the last bit.
+    ///
+    /// [`ControlFlow::Break`]: std::ops::ControlFlow::Break
+    fn box_query<Q: BoxQuery<Self::Prim>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        if let Some(mut ball) = crate::overlap::BallOfBox::new(query) {
+            self.ball_query(&mut ball, stats);
+        }
+    }
+
+    /// The primitives that meet the closed box `bounds` ([`Primitive::overlaps_box`]), in
+    /// ascending order, reporting events to `stats`.
+    #[inline]
+    fn overlapping_with<S: Stats>(&self, bounds: &Aabb, stats: &mut S) -> Vec<u32> {
+        let mut query = OverlapQuery::all(*bounds);
+        self.box_query(&mut query, stats);
+        query.into_ids()
+    }
+
+    /// The primitives that meet the closed box `bounds`, in ascending order: see
+    /// [`overlapping_with`](Accel::overlapping_with).
+    ///
+    /// ```
+    /// use rt_core::{Aabb, Accel, BruteForce, Triangle, glam::Vec3};
+    /// // Two triangles whose bounding boxes both meet the query box; only one meets the box.
+    /// let tris = [
+    ///     Triangle::new(Vec3::ZERO, Vec3::new(4.0, 0.0, 0.0), Vec3::new(0.0, 4.0, 0.0)),
+    ///     Triangle::new(Vec3::new(4.0, 0.0, 1.0), Vec3::new(4.0, 4.0, 1.0), Vec3::new(0.0, 4.0, 1.0)),
+    /// ];
+    /// let accel = BruteForce::build(&tris, &());
+    /// let corner = Aabb::new(Vec3::new(0.0, 0.0, -1.0), Vec3::new(1.0, 1.0, 2.0));
+    /// assert_eq!(accel.overlapping(&corner), vec![0]);
+    /// assert!(accel.overlaps_any(&corner));
+    /// ```
+    #[inline]
+    fn overlapping(&self, bounds: &Aabb) -> Vec<u32> {
+        self.overlapping_with(bounds, &mut NoStats)
+    }
+
+    /// Whether any primitive meets the closed box `bounds`; the walk stops at the first found.
+    #[inline]
+    fn overlaps_any(&self, bounds: &Aabb) -> bool {
+        let mut query = OverlapQuery::first(*bounds);
+        self.box_query(&mut query, &mut NoStats);
+        query.found()
     }
 
     /// Heap and inline bytes the structure holds, its copy of the primitives included.

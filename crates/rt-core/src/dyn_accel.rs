@@ -1,7 +1,9 @@
 //! Any structure as a trait object: [`DynAccel`].
 
 use crate::trace::Trace;
-use crate::{Aabb, Accel, BallQuery, BuildStats, Counters, Hit, NoStats, PointHit, Ray, Region};
+use crate::{
+    Aabb, Accel, BallQuery, BoxQuery, BuildStats, Counters, Hit, NoStats, PointHit, Ray, Region,
+};
 use glam::Vec3;
 
 /// Any [`Accel`] as a trait object: a structure chosen at run time, bottom levels of several
@@ -41,6 +43,14 @@ pub trait DynAccel<P>: Send + Sync {
     fn occluded_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> bool;
     /// [`Accel::ball_query`], counted into `counters` if given.
     fn ball_query_dyn(&self, query: &mut dyn BallQuery<P>, counters: Option<&mut Counters>);
+    /// [`Accel::box_query`], counted into `counters` if given. The default, for wrappers that
+    /// implement only [`ball_query_dyn`](DynAccel::ball_query_dyn), runs the ball query of the
+    /// ball around the box, as [`Accel::box_query`]'s default does.
+    fn box_query_dyn(&self, mut query: &mut dyn BoxQuery<P>, counters: Option<&mut Counters>) {
+        if let Some(mut ball) = crate::overlap::BallOfBox::new(&mut query) {
+            self.ball_query_dyn(&mut ball, counters);
+        }
+    }
     /// One closest-hit (`any == false`) or any-hit query with every step of its walk recorded
     /// ([`Trace`]); an any-hit answer is `Some` with primitive `u32::MAX` when occluded.
     fn trace_dyn(&self, ray: &Ray, any: bool) -> (Option<Hit>, Trace);
@@ -135,6 +145,17 @@ impl<A: Accel> DynAccel<A::Prim> for A {
         match counters {
             Some(c) => self.ball_query(&mut query, c),
             None => self.ball_query(&mut query, &mut NoStats),
+        }
+    }
+
+    fn box_query_dyn(
+        &self,
+        mut query: &mut dyn BoxQuery<A::Prim>,
+        counters: Option<&mut Counters>,
+    ) {
+        match counters {
+            Some(c) => self.box_query(&mut query, c),
+            None => self.box_query(&mut query, &mut NoStats),
         }
     }
 

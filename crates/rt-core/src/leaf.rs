@@ -1,11 +1,13 @@
-//! What every structure does in a leaf or cell: test a list of primitives against the ray.
+//! What every structure does in a leaf or cell: test a list of primitives against the ray, or
+//! offer them to a box query.
 //!
 //! Structures that reference a primitive from several cells (kd-trees, grids, octrees) share
 //! this loop, with a per-ray [`Mailbox`] to test each primitive once; the BVH, whose leaves own
 //! their primitives, needs no mailbox.
 
 use crate::trace::{self, Event};
-use crate::{Hit, Mailbox, Primitive, Ray, Stats};
+use crate::{BoxQuery, Hit, Mailbox, Primitive, Ray, Stats, Visited};
+use std::ops::ControlFlow;
 
 /// The "no hit yet" record of a ray whose interval ends at `t_max`.
 #[inline(always)]
@@ -78,4 +80,27 @@ pub fn answer<const ANY: bool>(best: Hit) -> Option<Hit> {
     } else {
         best
     })
+}
+
+/// Offers a box query the primitives `ids` (indices into `prims`) of a leaf or cell, each only
+/// the first time this query meets it (`seen`), reporting tests and skips to `stats`: what
+/// structures that list a primitive in several cells do in each cell a box query reaches.
+/// `Break` as soon as the query stops.
+#[inline(always)]
+pub fn offer_once<P, Q: BoxQuery<P>, S: Stats>(
+    prims: &[P],
+    ids: &[u32],
+    seen: &mut Visited,
+    query: &mut Q,
+    stats: &mut S,
+) -> ControlFlow<()> {
+    for &id in ids {
+        if !seen.first_visit(id) {
+            stats.mailbox_skip();
+            continue;
+        }
+        stats.prim_test();
+        query.test(&prims[id as usize], id)?;
+    }
+    ControlFlow::Continue(())
 }

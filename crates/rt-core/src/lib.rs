@@ -46,6 +46,12 @@
 //! whose ball shrinks as primitives are found; [`ClosestPointQuery`] is the standard one, and
 //! callers can write others (a transformed instance, all primitives within a radius).
 //!
+//! # Box overlap
+//! [`Accel::overlapping`] lists the primitives that meet an axis-aligned box, exactly (a
+//! triangle is clipped to the box, not judged by its bounding box), and [`Accel::overlaps_any`]
+//! stops at the first. Structures implement one traversal, [`Accel::box_query`], over a
+//! [`BoxQuery`] that may end the walk; [`OverlapQuery`] is the standard one.
+//!
 //! # Instances
 //! A two-level scene places built structures (any [`Accel`], behind [`DynAccel`], kinds mixed) with
 //! affine transforms: [`Instance`], [`TwoLevel`], the reference [`LinearInstances`], and rt-bvh's
@@ -86,6 +92,7 @@ mod lanes;
 pub mod leaf;
 mod mailbox;
 mod mesh;
+mod overlap;
 pub mod par;
 mod pod;
 mod primitive;
@@ -117,8 +124,9 @@ pub use instance::{
     LinearInstances, TransformPrimitive, TwoLevel, bottom_bytes,
     closest_point_on_transformed_triangle, scene_margins,
 };
-pub use mailbox::Mailbox;
+pub use mailbox::{Mailbox, Visited};
 pub use mesh::{Mesh, MeshError, Shading};
+pub use overlap::{BoxQuery, OverlapQuery};
 pub use primitive::{PrimHit, Primitive, TriangleTest, valid_bounds, valid_primitives};
 pub use ray::Ray;
 pub use refit::{Refit, RefitError};

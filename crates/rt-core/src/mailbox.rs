@@ -75,3 +75,69 @@ mod tests {
         assert!(!mb.check_and_insert(2));
     }
 }
+
+/// Every primitive one query has been offered, for queries that reach many cells and want each
+/// primitive once: box overlap over a kd-tree, grid or octree, where a box that covers many
+/// cells meets most of its primitives' references many times, more than a [`Mailbox`] of a few
+/// slots can remember.
+///
+/// One bit per primitive, in a buffer that each thread keeps between queries: a query marks the
+/// bits it sets and clears only those when it ends, so its cost follows the primitives it meets,
+/// not the scene's size.
+///
+/// ```
+/// use rt_core::Visited;
+/// let tested = Visited::with(1000, |seen| {
+///     [5, 7, 5, 999, 7].into_iter().filter(|&id| seen.first_visit(id)).count()
+/// });
+/// assert_eq!(tested, 3);
+/// ```
+#[derive(Debug, Default)]
+pub struct Visited {
+    words: Vec<u64>,
+    /// The words with a bit set, to clear at the end.
+    touched: Vec<u32>,
+}
+
+thread_local! {
+    /// The buffer of this thread's last query, kept for the next.
+    static SPARE: std::cell::Cell<Visited> = std::cell::Cell::new(Visited::default());
+}
+
+impl Visited {
+    /// Runs `f` with a set for primitive indices below `len`, empty at the start. The thread's
+    /// buffer is taken for the call (a query nested inside `f` gets a buffer of its own) and put
+    /// back cleared.
+    pub fn with<R>(len: usize, f: impl FnOnce(&mut Visited) -> R) -> R {
+        let mut set = SPARE.with(|s| s.take());
+        let words = len.div_ceil(64);
+        if set.words.len() < words {
+            set.words.resize(words, 0);
+        }
+        let result = f(&mut set);
+        for &w in &set.touched {
+            set.words[w as usize] = 0;
+        }
+        set.touched.clear();
+        SPARE.with(|s| s.set(set));
+        result
+    }
+
+    /// Returns true the first time `id` is seen by this query, and marks it; false after.
+    ///
+    /// # Panics
+    /// If `id` is not below the `len` given to [`Visited::with`] (rounded up to 64).
+    #[inline]
+    pub fn first_visit(&mut self, id: u32) -> bool {
+        let (w, bit) = ((id / 64) as usize, 1u64 << (id % 64));
+        let word = &mut self.words[w];
+        if *word & bit != 0 {
+            return false;
+        }
+        if *word == 0 {
+            self.touched.push(w as u32);
+        }
+        *word |= bit;
+        true
+    }
+}

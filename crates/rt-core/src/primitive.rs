@@ -77,6 +77,20 @@ pub trait Primitive: Clone + Send + Sync + Debug + 'static {
         (self.clip_bounds(&left), self.clip_bounds(&right))
     }
 
+    /// Whether the primitive meets the closed box `b`: what box overlap queries
+    /// ([`Accel::overlapping`](crate::Accel::overlapping)) report.
+    ///
+    /// The default asks [`clip_bounds`](Primitive::clip_bounds), which is exact for
+    /// [`Triangle`](crate::Triangle) (a triangle beside the box, whose bounding box meets it, is
+    /// not reported) and falls back to the bounding box for types that do not clip.
+    /// [`Sphere`](crate::Sphere) measures its distance from the box. Structures prune with
+    /// boxes that contain each primitive's [`clip_bounds`](Primitive::clip_bounds) within them,
+    /// so the answer must imply that `clip_bounds(b)` is `Some`.
+    #[inline]
+    fn overlaps_box(&self, b: &Aabb) -> bool {
+        self.clip_bounds(b).is_some()
+    }
+
     /// The hit with `ray.t_min <= t <= t_max`, if any. Both ends are inclusive so that a structure
     /// that shrinks `t_max` to the closest hit so far still finds an equally close hit on a
     /// primitive with a smaller index (the tie rule of [`Accel`](crate::Accel)).
@@ -100,8 +114,9 @@ pub trait Primitive: Clone + Send + Sync + Debug + 'static {
     /// Structures with SIMD triangle kernels (rt-bvh's wide layout) store such primitives
     /// pre-processed in packs and run that test themselves, bit for bit as the scalar function
     /// does, instead of calling `intersect`. Return `Some` only when `intersect` and `occludes`
-    /// answer exactly as that test on that triangle does, and `closest_point` as
-    /// [`Triangle`](crate::Triangle)'s.
+    /// answer exactly as that test on that triangle does, and `closest_point` and
+    /// `overlaps_box` as [`Triangle`](crate::Triangle)'s (for the Möller–Trumbore test, as
+    /// [`MtTriangle`](crate::MtTriangle)'s).
     #[inline]
     fn as_triangle(&self) -> Option<(crate::Triangle, TriangleTest)> {
         None

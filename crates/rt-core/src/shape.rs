@@ -75,6 +75,14 @@ impl Primitive for Shape {
     }
 
     #[inline]
+    fn overlaps_box(&self, b: &Aabb) -> bool {
+        match self {
+            Shape::Triangle(t) => t.overlaps_box(b),
+            Shape::Sphere(s) => s.overlaps_box(b),
+        }
+    }
+
+    #[inline]
     fn split_bounds(&self, cell: &Aabb, axis: usize, pos: f32) -> (Option<Aabb>, Option<Aabb>) {
         match self {
             Shape::Triangle(t) => t.split_bounds(cell, axis, pos),

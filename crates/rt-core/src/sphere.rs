@@ -69,6 +69,20 @@ impl Primitive for Sphere {
         self.center.is_finite() && self.radius.is_finite() && self.radius > 0.0
     }
 
+    /// Whether the box meets the ball: the box's nearest point lies within the radius (computed
+    /// in `f64`, where the squares of `f32` coordinates neither overflow nor round), and the box
+    /// meets the sphere's bounding box, which keeps the answer within the cells structures store
+    /// the sphere under.
+    #[inline]
+    fn overlaps_box(&self, b: &Aabb) -> bool {
+        let c = self.center.as_dvec3();
+        let gap = (b.min.as_dvec3() - c)
+            .max(c - b.max.as_dvec3())
+            .max(glam::DVec3::ZERO);
+        let r = f64::from(self.radius);
+        !b.is_empty() && self.bounds().overlaps(b) && gap.length_squared() <= r * r
+    }
+
     /// The point `center + radius·(p - center)/|p - center|`, computed in `f64`; from the centre
     /// itself, the sphere's top (`+y`).
     fn closest_point(&self, p: Vec3) -> Vec3 {

@@ -302,10 +302,24 @@ crate::pod_struct! {
     pub struct MtTriangle(pub Triangle);
 }
 
+impl MtTriangle {
+    /// The triangle as the Möller–Trumbore test sees it: the first vertex and the edges to the
+    /// others, each rounded to `f32` as the test computes them, added back (`v0 + (v1 - v0)`
+    /// may differ from `v1` in the last bit). rt-bvh's packs keep only this form, so box
+    /// overlap and clipping use it, and every structure stores the triangle under the same cells.
+    #[inline]
+    pub fn edge_form(&self) -> [Vec3; 3] {
+        let Triangle { v0, v1, v2 } = self.0;
+        [v0, v0 + (v1 - v0), v0 + (v2 - v0)]
+    }
+}
+
 impl Primitive for MtTriangle {
+    /// The box around both the vertices and their [`edge_form`](MtTriangle::edge_form), so
+    /// that a box overlap found on the edge form lies in every box built around the triangle.
     #[inline]
     fn bounds(&self) -> Aabb {
-        self.0.bounds()
+        self.0.bounds().union(Aabb::from_points(&self.edge_form()))
     }
     #[inline]
     fn centroid(&self) -> Vec3 {
@@ -316,11 +330,16 @@ impl Primitive for MtTriangle {
     }
     #[inline]
     fn clip_bounds(&self, cell: &Aabb) -> Option<Aabb> {
-        self.0.clip_bounds(cell)
+        crate::clip_triangle_bounds(self.edge_form(), cell)
     }
     #[inline]
     fn split_bounds(&self, cell: &Aabb, axis: usize, pos: f32) -> (Option<Aabb>, Option<Aabb>) {
-        self.0.split_bounds(cell, axis, pos)
+        crate::split_triangle_bounds(self.edge_form(), cell, axis, pos)
+    }
+    /// Clips the [`edge_form`](MtTriangle::edge_form), as rt-bvh's packs do.
+    #[inline]
+    fn overlaps_box(&self, b: &Aabb) -> bool {
+        crate::clip_triangle_bounds(self.edge_form(), b).is_some()
     }
     #[inline]
     fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {

@@ -94,6 +94,7 @@ pub mod bundle;
 mod cell;
 pub mod dda;
 pub mod nearest;
+pub mod overlap;
 mod regions;
 mod traverse;
 mod validate;
@@ -266,6 +267,11 @@ impl<P: Primitive> Accel for Grid<P> {
     /// Cells in growing shells around the centre ([`nearest::shells`]).
     fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
         self.ball(query, stats);
+    }
+
+    /// The block of cells the query box covers ([`overlap::cells_meeting`]).
+    fn box_query<Q: rt_core::BoxQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        let _ = self.box_cells(query, stats);
     }
 
     fn memory_bytes(&self) -> usize {

@@ -81,6 +81,7 @@ mod builder;
 mod bundle;
 mod nearest;
 mod node;
+mod overlap;
 mod regions;
 mod traverse;
 mod validate;
@@ -250,6 +251,11 @@ impl<P: Primitive> Accel for HGrid<P> {
     /// Shells of cells around the centre, nested grids searched in turn (`nearest.rs`).
     fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
         self.ball(query, stats);
+    }
+
+    /// The cells the query box covers, nested grids included (`overlap.rs`).
+    fn box_query<Q: rt_core::BoxQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        let _ = self.box_cells(query, stats);
     }
 
     fn memory_bytes(&self) -> usize {

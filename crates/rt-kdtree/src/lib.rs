@@ -131,6 +131,7 @@ mod builder;
 mod bundle;
 mod nearest;
 mod node;
+mod overlap;
 mod regions;
 mod traverse;
 mod validate;
@@ -398,6 +399,11 @@ impl<P: Primitive> Accel for KdTree<P> {
     /// Near side first, the far side while the ball reaches it (`nearest.rs`).
     fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
         self.ball(query, stats);
+    }
+
+    /// Each half the query box reaches (`overlap.rs`).
+    fn box_query<Q: rt_core::BoxQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        let _ = self.box_cells(query, stats);
     }
 
     fn memory_bytes(&self) -> usize {

@@ -118,6 +118,7 @@ mod builder;
 mod bundle;
 mod nearest;
 mod node;
+mod overlap;
 mod regions;
 mod traverse;
 mod validate;
@@ -308,6 +309,11 @@ impl<P: Primitive> Accel for Octree<P> {
     /// Nearest child first, pruned by the query's radius (`nearest.rs`).
     fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
         self.ball(query, stats);
+    }
+
+    /// Every octant the query box meets (`overlap.rs`).
+    fn box_query<Q: rt_core::BoxQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        let _ = self.box_cells(query, stats);
     }
 
     fn memory_bytes(&self) -> usize {

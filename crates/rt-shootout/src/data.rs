@@ -110,8 +110,8 @@ pub struct Report {
     pub checked_rays: usize,
     pub rows: Vec<Row>,
     pub disagreements: Vec<Disagreement>,
-    /// Closest-point queries on which a row disagreed with brute force (the first few).
-    pub point_disagreements: Vec<points::PointDisagreement>,
+    /// Closest-point or box queries on which a row disagreed with brute force (the first few).
+    pub query_disagreements: Vec<points::QueryDisagreement>,
     pub per_ray_answers: bool,
 }
 
@@ -124,10 +124,10 @@ impl Report {
             .sum()
     }
 
-    /// The share of the rays that hit the scene (any-hit rays: that are occluded), from the first
-    /// row that traced them all (brute force traces only the checked ones); `None` for
-    /// closest-point queries or when no row traced. A view where most rays miss times little but
-    /// the call, so the share belongs beside every speed.
+    /// The share of the rays that hit the scene (any-hit rays: that are occluded; box queries:
+    /// that meet a primitive), from the first row that traced them all (brute force traces only
+    /// the checked ones); `None` for closest-point queries or when no row traced. A view where most rays miss times
+    /// little but the call, so the share belongs beside every speed.
     pub fn hit_share(&self) -> Option<f64> {
         if self.ray_kind == points::KIND {
             return None;

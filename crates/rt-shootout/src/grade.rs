@@ -95,6 +95,12 @@ impl Accel for Row {
         self.0.ball_query_dyn(query, Some(&mut c));
         replay(c, stats);
     }
+    /// The row's own box query, its counts replayed into `stats` when it returns.
+    fn box_query<Q: rt_core::BoxQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        let mut c = rt_core::Counters::default();
+        self.0.box_query_dyn(query, Some(&mut c));
+        replay(c, stats);
+    }
     fn memory_bytes(&self) -> usize {
         self.0.memory_bytes_dyn()
     }

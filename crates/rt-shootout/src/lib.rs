@@ -206,6 +206,8 @@ mod guide {
     struct Using;
     #[doc = include_str!("../../../docs/closest-points.md")]
     struct ClosestPoints;
+    #[doc = include_str!("../../../docs/overlap.md")]
+    struct Overlap;
     #[doc = include_str!("../../../docs/instances.md")]
     struct Instances;
     #[doc = include_str!("../../../docs/dynamic.md")]

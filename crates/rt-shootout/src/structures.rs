@@ -12,7 +12,8 @@ use rt_bvh::Bvh;
 use rt_core::glam::Vec3;
 use rt_core::{
     Aabb, Accel, BallQuery, BruteForce, BuildStats, Counters, DynAccel, Hit, Instance, NoStats,
-    PointHit, Ray, Refit, RefitError, Region, Shape, Stats, Trace, Triangle, TwoLevel,
+    OverlapQuery, PointHit, Ray, Refit, RefitError, Region, Shape, Stats, Trace, Triangle,
+    TwoLevel,
 };
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
@@ -191,6 +192,40 @@ pub fn closest_timed(s: &dyn DynAccel<Triangle>, points: &[(Vec3, f32)]) -> usiz
             let out = &mut out[..points.len()];
             s.closest_points_all(points, out, None);
             out.iter().filter(|h| h.is_some()).count()
+        })
+        .sum()
+}
+
+/// Every box's overlap list ([`rt_core::Accel::overlapping`]: ascending, each primitive once),
+/// counted.
+pub fn overlap_counted(s: &dyn DynAccel<Triangle>, boxes: &[Aabb]) -> (Vec<Vec<u32>>, Counters) {
+    let (found, counters) = counted_chunks(boxes, |boxes, out, c| {
+        for (b, slot) in boxes.iter().zip(out) {
+            let mut query = OverlapQuery::all(*b);
+            s.box_query_dyn(&mut query, Some(c));
+            *slot = Some(query.into_ids());
+        }
+    });
+    (
+        found.into_iter().map(Option::unwrap_or_default).collect(),
+        counters,
+    )
+}
+
+/// How many boxes meet a primitive, without counters: the timed pass. Each box's list is
+/// collected, as a caller of `overlapping` gets it.
+pub fn overlap_timed(s: &dyn DynAccel<Triangle>, boxes: &[Aabb]) -> usize {
+    boxes
+        .par_chunks(CHUNK)
+        .map(|boxes| {
+            boxes
+                .iter()
+                .filter(|b| {
+                    let mut query = OverlapQuery::all(**b);
+                    s.box_query_dyn(&mut query, None);
+                    !query.into_ids().is_empty()
+                })
+                .count()
         })
         .sum()
 }

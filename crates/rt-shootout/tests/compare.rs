@@ -384,12 +384,65 @@ fn a_wrong_closest_point_query_is_caught_on_and_off_the_checked_subset() {
         report.checked_rays > 1000,
         "points outside the subset were settled"
     );
-    let d = &report.point_disagreements[0];
+    let d = &report.query_disagreements[0];
     assert_eq!(d.structure, "broken");
-    assert!(d.expected.is_some_and(|h| h.prim % 2 == 0), "{d:?}");
+    assert!(d.rust.starts_with("closest_point(Vec3::new("), "{d:?}");
+    // Brute force's answer names an even primitive, the kind the broken row loses.
+    let prim: u32 = d
+        .expected
+        .split("prim: ")
+        .nth(1)
+        .and_then(|rest| rest.split(',').next())
+        .and_then(|n| n.parse().ok())
+        .unwrap_or_else(|| panic!("no primitive in {d:?}"));
+    assert_eq!(prim % 2, 0, "{d:?}");
     let table = to_table(&report);
     assert!(
         table.contains("Mqueries/s") && table.contains("3000 closest-point queries"),
         "{table}"
     );
+}
+
+#[test]
+fn a_wrong_box_query_is_caught_on_and_off_the_checked_subset() {
+    // The broken row's box query runs the trait's default (the ball around the box) through
+    // its ball query, which loses every even primitive.
+    let a = args(&[
+        "--scene",
+        "random-soup",
+        "--query",
+        "overlap",
+        "--points",
+        "3000",
+        "--box-size",
+        "0.05",
+        "--check-rays",
+        "1000",
+        "--repeats",
+        "1",
+    ]);
+    let mut entries = all();
+    entries.retain(|e| ["bvh", "kdtree", "grid", "hgrid", "octree"].contains(&e.name.as_str()));
+    entries.push(entry_of::<LosesEvenHits<Triangle>>());
+    let report = measure(&a, entries).unwrap();
+    assert_eq!(report.ray_kind, "overlap");
+    for row in &report.rows {
+        assert_eq!(
+            row.mismatches > 0,
+            row.name == "broken",
+            "{}: {}",
+            row.name,
+            row.mismatches
+        );
+    }
+    let broken = report.rows.iter().find(|r| r.name == "broken").unwrap();
+    assert!(broken.mismatches > 1000, "{}", broken.mismatches);
+    assert!(
+        report.checked_rays > 1000,
+        "boxes outside the subset were settled"
+    );
+    let d = &report.query_disagreements[0];
+    assert!(d.rust.starts_with("overlapping(&Aabb::new("), "{d:?}");
+    let table = to_table(&report);
+    assert!(table.contains("3000 box overlap queries"), "{table}");
 }

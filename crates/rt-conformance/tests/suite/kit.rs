@@ -1,9 +1,12 @@
 //! The conformance kit never hangs and always names the ray: structures that loop forever or
 //! panic on one ray fail with a short message naming that ray.
 
-use rt_conformance::{check_case_within, check_random, scene};
+use rt_conformance::{STALL_LIMIT, check_case_within, check_random, scene};
 use rt_core::glam::Vec3;
-use rt_core::{Aabb, Accel, BallQuery, BruteForce, BuildStats, Hit, Ray, Stats, Triangle};
+use rt_core::{
+    Aabb, Accel, BallQuery, BoxQuery, BruteForce, BuildStats, Hit, Primitive, Ray, Stats, Triangle,
+};
+use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
@@ -608,4 +611,85 @@ fn the_coherent_bundle_check_fails_a_dropped_lane_and_rays_that_go_alone() {
     )
     .unwrap_err();
     assert!(e.starts_with("no bundle step at all"), "{e}");
+}
+
+/// Brute force whose box queries are wrong on purpose: it prunes with open boxes (`OPEN`), so a
+/// triangle that only touches the query box is never offered, or it goes on offering after the
+/// query stopped (`!OPEN`).
+struct BoxesWrong<const OPEN: bool>(BruteForce<Triangle>);
+
+impl<const OPEN: bool> Accel for BoxesWrong<OPEN> {
+    forward_to_brute_force!();
+    const NAME: &'static str = "boxes-wrong";
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        self.0.intersect_with(ray, stats)
+    }
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.ball_query(query, stats);
+    }
+    fn box_query<Q: BoxQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.box_query(&mut WrongBoxes::<Q, OPEN>(query), stats);
+    }
+}
+
+/// The query [`BoxesWrong`] hands brute force: it hides triangles that only touch the box
+/// (`OPEN`), or never stops the walk (`!OPEN`).
+struct WrongBoxes<'a, Q, const OPEN: bool>(&'a mut Q);
+
+impl<Q: BoxQuery<Triangle>, const OPEN: bool> BoxQuery<Triangle> for WrongBoxes<'_, Q, OPEN> {
+    fn bounds(&self) -> Aabb {
+        self.0.bounds()
+    }
+    fn test(&mut self, t: &Triangle, id: u32) -> ControlFlow<()> {
+        let (tb, b) = (t.bounds(), self.0.bounds());
+        if OPEN {
+            if tb.min.cmplt(b.max).all() && b.min.cmplt(tb.max).all() {
+                return self.0.test(t, id);
+            }
+            return ControlFlow::Continue(());
+        }
+        let _ = self.0.test(t, id);
+        ControlFlow::Continue(())
+    }
+    fn test_triangle(&mut self, v: [Vec3; 3], id: u32) -> ControlFlow<()> {
+        self.test(&Triangle::new(v[0], v[1], v[2]), id)
+    }
+}
+
+#[test]
+fn box_queries_that_miss_touching_triangles_or_go_on_after_a_stop_fail_the_kit() {
+    let s = scene("shared_edge");
+    let open = check_case_within::<BoxesWrong<true>>(&(), &s.triangles, &s.rays, STALL_LIMIT)
+        .expect_err("a triangle touching the box must be found");
+    assert!(
+        open.contains("overlapping disagrees with brute force") && open.contains("missing ["),
+        "{open}"
+    );
+    let goes_on = check_case_within::<BoxesWrong<false>>(&(), &s.triangles, &s.rays, STALL_LIMIT)
+        .expect_err("offering primitives after the query stopped must be caught");
+    assert!(goes_on.contains("stops at its first find"), "{goes_on}");
+}
+
+/// Brute force that implements only the ball query: its box queries run the trait's default,
+/// the ball around the box.
+struct BallOnly(BruteForce<Triangle>);
+
+impl Accel for BallOnly {
+    forward_to_brute_force!();
+    const NAME: &'static str = "ball-only";
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        self.0.intersect_with(ray, stats)
+    }
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.ball_query(query, stats);
+    }
+}
+
+#[test]
+fn the_default_box_query_through_the_ball_passes_the_kit() {
+    for name in ["shared_edge", "large_coordinates", "planar_triangles"] {
+        let s = scene(name);
+        check_case_within::<BallOnly>(&(), &s.triangles, &s.rays, STALL_LIMIT)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+    }
 }

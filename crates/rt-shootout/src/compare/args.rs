@@ -13,6 +13,20 @@ pub enum QueryKind {
     Rays,
     /// Closest-point queries: the primitive nearest to each of `--points` points.
     ClosestPoint,
+    /// Box overlap queries: the primitives meeting a box around each of `--points` points
+    /// (`--box-size` says how large).
+    Overlap,
+}
+
+impl QueryKind {
+    /// The flag's value for this kind, as `--query` takes it.
+    pub fn name(self) -> &'static str {
+        match self {
+            QueryKind::Rays => "rays",
+            QueryKind::ClosestPoint => "closest-point",
+            QueryKind::Overlap => "overlap",
+        }
+    }
 }
 
 /// Which rays to trace.
@@ -65,13 +79,19 @@ pub struct Args {
     /// kdtree, grid), and write `grade.json` and `grade.md` into `--out DIR` (default `grade`).
     #[arg(long, value_name = "ROW")]
     pub grade: Option<String>,
-    /// Which query to measure: rays, or closest points (nearest primitive to a point).
+    /// Which query to measure: rays, closest points (nearest primitive to a point), or box
+    /// overlap (the primitives meeting a box).
     #[arg(long, value_enum, default_value_t = QueryKind::Rays)]
     pub query: QueryKind,
-    /// Closest-point queries: how many points (half uniform in the scene box grown by a quarter
-    /// on every side, half within 2% of its diagonal from the surface).
+    /// Closest-point and box overlap queries: how many query points (half uniform in the scene
+    /// box grown by a quarter on every side, half within 2% of its diagonal from the surface);
+    /// box queries put a box around each.
     #[arg(long, default_value = "100k", value_parser = crate::cli::count)]
     pub points: usize,
+    /// Box overlap queries: each box's sides, as a share of the scene box's diagonal, each
+    /// drawn between a quarter and 1.75 times this.
+    #[arg(long, default_value_t = 0.01, value_name = "F")]
+    pub box_size: f32,
     /// Closest-point queries: the largest distance searched [default: no limit].
     #[arg(long, value_name = "D")]
     pub max_distance: Option<f32>,

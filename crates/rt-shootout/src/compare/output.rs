@@ -10,15 +10,18 @@ use std::fmt::Write as _;
 /// structure, and the bundle and disagreement tables where there are any.
 pub fn to_table(r: &Report) -> String {
     let mut s = String::new();
-    let (unit, units) = if r.ray_kind == points::KIND {
-        ("query", "closest-point queries")
-    } else {
-        ("ray", "rays")
+    let (unit, units) = match r.ray_kind {
+        points::KIND => ("query", "closest-point queries"),
+        points::OVERLAP_KIND => ("query", "box overlap queries"),
+        _ => ("ray", "rays"),
     };
-    if r.ray_kind == points::KIND {
+    if points::is_query_kind(r.ray_kind) {
+        let met = r.hit_share().map_or(String::new(), |h| {
+            format!(" ({:.1}% meet the mesh)", 100.0 * h)
+        });
         let _ = writeln!(
             s,
-            "scene {} ({} triangles, {} valid), {} {units}, {} threads; {} checked against brute force",
+            "scene {} ({} triangles, {} valid), {} {units}{met}, {} threads; {} checked against brute force",
             r.scene, r.triangles, r.valid_triangles, r.rays, r.threads, r.checked_rays
         );
     } else {
@@ -271,7 +274,7 @@ pub(super) fn to_json(r: &Report) -> String {
         "scene": r.scene,
         "triangles": r.triangles,
         "valid_triangles": r.valid_triangles,
-        "query": if r.ray_kind == points::KIND { "closest-point" } else { "rays" },
+        "query": if points::is_query_kind(r.ray_kind) { r.ray_kind } else { "rays" },
         "ray_kind": r.ray_kind,
         "view": r.view,
         "rays": r.rays,
@@ -284,7 +287,7 @@ pub(super) fn to_json(r: &Report) -> String {
 }
 
 pub(super) fn describe_disagreements(r: &Report, args: &Args) -> String {
-    let mut s = if r.point_disagreements.is_empty() {
+    let mut s = if r.query_disagreements.is_empty() {
         format!(
             "error: {} mismatches. First disagreeing rays (save the rays-file lines to a file and replay with \
              `cargo xtask compare --scene {} --rays-file FILE`, or paste the Rust into a test):\n",
@@ -293,22 +296,18 @@ pub(super) fn describe_disagreements(r: &Report, args: &Args) -> String {
         )
     } else {
         format!(
-            "error: {} mismatches. First disagreeing closest-point queries (paste the Rust into a \
-             test on the scene {}):\n",
+            "error: {} mismatches. First disagreeing {} queries (paste the Rust into a test on \
+             the scene {}):\n",
             r.total_mismatches(),
+            r.ray_kind,
             args.scene
         )
     };
-    for d in &r.point_disagreements {
+    for d in &r.query_disagreements {
         let _ = writeln!(s, "  {} on query {}:", d.structure, d.index);
-        let p = d.point;
-        let _ = writeln!(
-            s,
-            "    rust:      closest_point(Vec3::new({:?}, {:?}, {:?}), {:?})",
-            p.x, p.y, p.z, d.max_distance
-        );
-        let _ = writeln!(s, "    brute-force: {:?}", d.expected);
-        let _ = writeln!(s, "    {}: {:?}", d.structure, d.got);
+        let _ = writeln!(s, "    rust:      {}", d.rust);
+        let _ = writeln!(s, "    brute-force: {}", d.expected);
+        let _ = writeln!(s, "    {}: {}", d.structure, d.got);
     }
     for d in &r.disagreements {
         let _ = writeln!(s, "  {} on ray {}:", d.structure, d.ray_index);

@@ -1,29 +1,156 @@
-//! `compare --query closest-point`: the same shootout for closest-point queries.
+//! `compare --query closest-point` and `compare --query overlap`: the shootout for queries that
+//! are not rays.
 //!
-//! Every row answers the same points ([`raygen::query_points`]); brute force checks a random
-//! subset, the rows are checked against each other on every point, and brute force settles
-//! every point on which they disagree, as for rays.
+//! Every row answers the same queries: closest points to [`raygen::query_points`], or the
+//! primitives meeting boxes around them ([`overlap_boxes`]). Brute force checks a random subset,
+//! the rows are checked against each other on every query, and brute force settles every query
+//! on which they disagree, as for rays. One generic core, [`measure_queries`], runs both kinds
+//! ([`Queries`] says how each asks and compares).
 
 use super::{Args, Report, Row, Source, build_fastest, checked_subset};
 use crate::structures;
 use rt_core::glam::Vec3;
-use rt_core::{DynAccel, Triangle};
-use rt_core::{PointHit, Primitive};
+use rt_core::{Aabb, Counters, DynAccel, PointHit, Primitive, Rng, Triangle};
 use rt_scene::raygen;
+use std::fmt::Debug;
 use std::time::{Duration, Instant};
 
 /// The report's `ray_kind` for closest-point queries.
 pub const KIND: &str = "closest-point";
 
-/// A closest-point query on which a row disagreed with brute force.
+/// The report's `ray_kind` for box overlap queries.
+pub const OVERLAP_KIND: &str = "overlap";
+
+/// Whether a report holds queries other than rays.
+pub fn is_query_kind(kind: &str) -> bool {
+    kind == KIND || kind == OVERLAP_KIND
+}
+
+/// A query on which a row disagreed with brute force: the query as Rust source to paste into a
+/// test, and both answers as `Debug` prints them.
 #[derive(Debug)]
-pub struct PointDisagreement {
+pub struct QueryDisagreement {
     pub structure: String,
     pub index: usize,
-    pub point: Vec3,
-    pub max_distance: f32,
-    pub expected: Option<PointHit>,
-    pub got: Option<PointHit>,
+    pub rust: String,
+    pub expected: String,
+    pub got: String,
+}
+
+/// One kind of non-ray query: how a structure answers a chunk of them, how answers compare,
+/// and how a query prints as Rust.
+trait Queries {
+    type Query: Copy + Send + Sync;
+    type Answer: Clone + Debug + Send + Sync;
+    const KIND: &'static str;
+    /// The queries the rows answer.
+    fn queries(args: &Args, tris: &[Triangle], bounds: &Aabb) -> Result<Vec<Self::Query>, String>;
+    /// Every answer, counted.
+    fn counted(s: &dyn DynAccel<Triangle>, q: &[Self::Query]) -> (Vec<Self::Answer>, Counters);
+    /// How many queries found something, uncounted: the timed pass.
+    fn timed(s: &dyn DynAccel<Triangle>, q: &[Self::Query]) -> usize;
+    fn found(a: &Self::Answer) -> bool;
+    fn agree(a: &Self::Answer, b: &Self::Answer) -> bool;
+    fn rust(q: &Self::Query) -> String;
+}
+
+/// Closest points ([`Accel::closest_point`](rt_core::Accel::closest_point)).
+struct ClosestPoints;
+
+impl Queries for ClosestPoints {
+    type Query = (Vec3, f32);
+    type Answer = Option<PointHit>;
+    const KIND: &'static str = KIND;
+    fn queries(args: &Args, tris: &[Triangle], bounds: &Aabb) -> Result<Vec<(Vec3, f32)>, String> {
+        let max = args.max_distance.unwrap_or(f32::INFINITY);
+        if max.is_nan() || max < 0.0 {
+            return Err(format!("--max-distance must be at least 0, not {max}"));
+        }
+        Ok(raygen::query_points(tris, bounds, args.points, args.seed)
+            .into_iter()
+            .map(|p| (p, max))
+            .collect())
+    }
+    fn counted(s: &dyn DynAccel<Triangle>, q: &[(Vec3, f32)]) -> (Vec<Option<PointHit>>, Counters) {
+        structures::closest_counted(s, q)
+    }
+    fn timed(s: &dyn DynAccel<Triangle>, q: &[(Vec3, f32)]) -> usize {
+        structures::closest_timed(s, q)
+    }
+    fn found(a: &Option<PointHit>) -> bool {
+        a.is_some()
+    }
+    fn agree(a: &Option<PointHit>, b: &Option<PointHit>) -> bool {
+        PointHit::agree(*a, *b)
+    }
+    fn rust(&(p, max): &(Vec3, f32)) -> String {
+        format!(
+            "closest_point(Vec3::new({:?}, {:?}, {:?}), {max:?})",
+            p.x, p.y, p.z
+        )
+    }
+}
+
+/// Box overlap ([`Accel::overlapping`](rt_core::Accel::overlapping)).
+struct Overlaps;
+
+impl Queries for Overlaps {
+    type Query = Aabb;
+    type Answer = Vec<u32>;
+    const KIND: &'static str = OVERLAP_KIND;
+    fn queries(args: &Args, tris: &[Triangle], bounds: &Aabb) -> Result<Vec<Aabb>, String> {
+        let size = args.box_size;
+        if !(size > 0.0 && size <= 1.0) {
+            return Err(format!(
+                "--box-size must be above 0 and at most 1, not {size}"
+            ));
+        }
+        Ok(overlap_boxes(tris, bounds, args.points, size, args.seed))
+    }
+    fn counted(s: &dyn DynAccel<Triangle>, q: &[Aabb]) -> (Vec<Vec<u32>>, Counters) {
+        structures::overlap_counted(s, q)
+    }
+    fn timed(s: &dyn DynAccel<Triangle>, q: &[Aabb]) -> usize {
+        structures::overlap_timed(s, q)
+    }
+    fn found(a: &Vec<u32>) -> bool {
+        !a.is_empty()
+    }
+    fn agree(a: &Vec<u32>, b: &Vec<u32>) -> bool {
+        a == b
+    }
+    fn rust(b: &Aabb) -> String {
+        format!(
+            "overlapping(&Aabb::new(Vec3::new({:?}, {:?}, {:?}), Vec3::new({:?}, {:?}, {:?})))",
+            b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+        )
+    }
+}
+
+/// The boxes of `compare --query overlap`: one around each of `count` query points
+/// ([`raygen::query_points`]: half uniform in the scene box grown by a quarter, half near the
+/// surface), each side `size` of the scene box's diagonal times a factor drawn from 0.25 to
+/// 1.75, so boxes of several shapes, some thin, meet the mesh.
+pub fn overlap_boxes(
+    tris: &[Triangle],
+    bounds: &Aabb,
+    count: usize,
+    size: f32,
+    seed: u64,
+) -> Vec<Aabb> {
+    let mut rng = Rng::new(seed ^ 0x0b0e);
+    let side = bounds.extent().length() * size;
+    raygen::query_points(tris, bounds, count, seed)
+        .into_iter()
+        .map(|c| {
+            let half = Vec3::new(
+                rng.range(0.25, 1.75),
+                rng.range(0.25, 1.75),
+                rng.range(0.25, 1.75),
+            ) * (0.5 * side);
+            Aabb::new(c - half, c + half)
+        })
+        .collect()
 }
 
 pub(super) fn measure(
@@ -31,12 +158,28 @@ pub(super) fn measure(
     threads: usize,
     entries: Vec<structures::Entry>,
 ) -> Result<Report, String> {
+    measure_queries::<ClosestPoints>(args, threads, entries)
+}
+
+pub(super) fn measure_overlap(
+    args: &Args,
+    threads: usize,
+    entries: Vec<structures::Entry>,
+) -> Result<Report, String> {
+    measure_queries::<Overlaps>(args, threads, entries)
+}
+
+fn measure_queries<K: Queries>(
+    args: &Args,
+    threads: usize,
+    entries: Vec<structures::Entry>,
+) -> Result<Report, String> {
     if args.instances.is_some() {
-        return Err(
-            "--query closest-point runs on one mesh; leave out --instances (the library's \
-             Instances answer closest points, compare does not field them yet)"
-                .into(),
-        );
+        return Err(format!(
+            "--query {} runs on one mesh; leave out --instances (the library's Instances answer \
+             these queries, compare does not field them yet)",
+            K::KIND
+        ));
     }
     let source = Source::load(args)?;
     let (scene, tris) = (source.label.clone(), source.mesh.clone());
@@ -50,43 +193,36 @@ pub(super) fn measure(
     if args.points == 0 {
         return Err("--points must be at least 1".into());
     }
-    let max = args.max_distance.unwrap_or(f32::INFINITY);
-    if max.is_nan() || max < 0.0 {
-        return Err(format!("--max-distance must be at least 0, not {max}"));
-    }
     let bounds = rt_core::valid_bounds(tris.iter());
-    let queries: Vec<(Vec3, f32)> = raygen::query_points(&tris, &bounds, args.points, args.seed)
-        .into_iter()
-        .map(|p| (p, max))
-        .collect();
+    let queries = K::queries(args, &tris, &bounds)?;
     let subset = checked_subset(queries.len(), args.check_rays.unwrap_or(20_000), args.seed);
-    let subset_queries: Vec<(Vec3, f32)> = subset.iter().map(|&i| queries[i]).collect();
+    let subset_queries: Vec<K::Query> = subset.iter().map(|&i| queries[i]).collect();
 
     let mut rows = Vec::new();
     let mut answers = Vec::new();
     for entry in &entries {
         let (s, build_ms) = build_fastest(|| source.build(entry), args.repeats)?;
-        let (row, found) = query_row(&entry.name, s.as_ref(), build_ms, &queries, args.repeats);
+        let (row, found) =
+            query_row::<K>(&entry.name, s.as_ref(), build_ms, &queries, args.repeats);
         rows.push(row);
         answers.push(found);
     }
     let (brute, build_ms) = build_fastest(|| source.build(&structures::brute_force()), 1)?;
     let (mut brute_row, brute_found) =
-        query_row("brute-force", brute.as_ref(), build_ms, &subset_queries, 0);
+        query_row::<K>("brute-force", brute.as_ref(), build_ms, &subset_queries, 0);
 
     let mut disagreements = Vec::new();
-    let mut record = |rows: &mut [Row], i: usize, expected: Option<PointHit>| {
+    let mut record = |rows: &mut [Row], i: usize, expected: &K::Answer| {
         for (row, found) in rows.iter_mut().zip(&answers) {
-            if !PointHit::agree(expected, found[i]) {
+            if !K::agree(expected, &found[i]) {
                 row.mismatches += 1;
                 if disagreements.len() < 8 {
-                    disagreements.push(PointDisagreement {
+                    disagreements.push(QueryDisagreement {
                         structure: row.name.clone(),
                         index: i,
-                        point: queries[i].0,
-                        max_distance: queries[i].1,
-                        expected,
-                        got: found[i],
+                        rust: K::rust(&queries[i]),
+                        expected: format!("{expected:?}"),
+                        got: format!("{:?}", found[i]),
                     });
                 }
             }
@@ -95,19 +231,19 @@ pub(super) fn measure(
     let mut in_subset = vec![false; queries.len()];
     for (k, &i) in subset.iter().enumerate() {
         in_subset[i] = true;
-        record(&mut rows, i, brute_found[k]);
+        record(&mut rows, i, &brute_found[k]);
     }
-    // Outside the subset, brute force settles every point on which the rows disagree.
+    // Outside the subset, brute force settles every query on which the rows disagree.
     let mut settled = 0;
     for i in (0..queries.len()).filter(|&i| !in_subset[i]) {
-        let first = answers.first().map(|a| a[i]);
+        let first = answers.first().map(|a| &a[i]);
         if answers
             .iter()
-            .any(|a| first.is_some_and(|f| !PointHit::agree(f, a[i])))
+            .any(|a| first.is_some_and(|f| !K::agree(f, &a[i])))
         {
             settled += 1;
-            let (expected, _) = structures::closest_counted(&*brute, &queries[i..=i]);
-            record(&mut rows, i, expected[0]);
+            let (expected, _) = K::counted(&*brute, &queries[i..=i]);
+            record(&mut rows, i, &expected[0]);
         }
     }
 
@@ -122,37 +258,37 @@ pub(super) fn measure(
         scene,
         triangles: tris.len(),
         valid_triangles: valid,
-        ray_kind: KIND,
+        ray_kind: K::KIND,
         view: "",
         rays: queries.len(),
         threads,
         checked_rays: subset.len() + settled,
         rows: all_rows,
         disagreements: Vec::new(),
-        point_disagreements: disagreements,
+        query_disagreements: disagreements,
         per_ray_answers: false,
     })
 }
 
 /// One row's figures: a counted pass, then `repeats` timed passes (the fastest counts; with
 /// none, the counted pass is timed).
-fn query_row(
+fn query_row<K: Queries>(
     name: &str,
     s: &dyn DynAccel<Triangle>,
     build_ms: f64,
-    queries: &[(Vec3, f32)],
+    queries: &[K::Query],
     repeats: u32,
-) -> (Row, Vec<Option<PointHit>>) {
+) -> (Row, Vec<K::Answer>) {
     let t = Instant::now();
-    let (found, counters) = structures::closest_counted(s, queries);
+    let (found, counters) = K::counted(s, queries);
     let mut best = t.elapsed();
-    let mut hits = found.iter().filter(|a| a.is_some()).count();
+    let mut hits = found.iter().filter(|a| K::found(a)).count();
     if repeats > 0 {
         best = Duration::MAX;
     }
     for _ in 0..repeats {
         let t = Instant::now();
-        hits = structures::closest_timed(s, queries);
+        hits = K::timed(s, queries);
         best = best.min(t.elapsed());
     }
     let row = Row::measured(name, s, build_ms, queries.len(), hits, counters, best);

@@ -30,10 +30,11 @@ pub fn run(args: &Args, entries: &[structures::Entry]) -> Result<Vec<Report>, St
         return Err("--threads must be at least 1".into());
     }
     if let Some(dir) = &args.out {
-        if args.query == QueryKind::ClosestPoint {
-            return Err(
-                "--out writes a report of ray queries only; leave it out with --query closest-point".into(),
-            );
+        if args.query != QueryKind::Rays {
+            return Err(format!(
+                "--out writes a report of ray queries only; leave it out with --query {}",
+                args.query.name()
+            ));
         }
         crate::report::prepare(dir)?;
     }
@@ -55,6 +56,9 @@ pub fn run(args: &Args, entries: &[structures::Entry]) -> Result<Vec<Report>, St
         let report = match args.query {
             QueryKind::Rays => pool.install(|| measure(&args, threads, entries))?,
             QueryKind::ClosestPoint => pool.install(|| points::measure(&args, threads, entries))?,
+            QueryKind::Overlap => {
+                pool.install(|| points::measure_overlap(&args, threads, entries))?
+            }
         };
         if args.json {
             println!("{}", to_json(&report));
@@ -64,7 +68,7 @@ pub fn run(args: &Args, entries: &[structures::Entry]) -> Result<Vec<Report>, St
             }
             print!("{}", to_table(&report));
         }
-        if !report.disagreements.is_empty() || !report.point_disagreements.is_empty() {
+        if !report.disagreements.is_empty() || !report.query_disagreements.is_empty() {
             eprint!("{}", describe_disagreements(&report, &args));
         }
         reports.push(report);
@@ -297,7 +301,7 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
         checked_rays: subset.len() + settled,
         rows: all_rows,
         disagreements,
-        point_disagreements: Vec::new(),
+        query_disagreements: Vec::new(),
         per_ray_answers: args.rays_file.is_some(),
     })
 }

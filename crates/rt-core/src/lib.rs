@@ -47,8 +47,8 @@
 //! callers can write others (a transformed instance, all primitives within a radius).
 //!
 //! # Box overlap
-//! [`Accel::overlapping`] lists the primitives that meet an axis-aligned box, exactly (a
-//! triangle is clipped to the box, not judged by its bounding box), and [`Accel::overlaps_any`]
+//! [`Accel::overlapping`] lists the primitives that meet an axis-aligned box (a triangle is
+//! clipped to the box, not judged by its bounding box), and [`Accel::overlaps_any`]
 //! stops at the first. Structures implement one traversal, [`Accel::box_query`], over a
 //! [`BoxQuery`] that may end the walk; [`OverlapQuery`] is the standard one.
 //!

@@ -80,9 +80,9 @@ pub trait Primitive: Clone + Send + Sync + Debug + 'static {
     /// Whether the primitive meets the closed box `b`: what box overlap queries
     /// ([`Accel::overlapping`](crate::Accel::overlapping)) report.
     ///
-    /// The default asks [`clip_bounds`](Primitive::clip_bounds), which is exact for
-    /// [`Triangle`](crate::Triangle) (a triangle beside the box, whose bounding box meets it, is
-    /// not reported) and falls back to the bounding box for types that do not clip.
+    /// The default asks [`clip_bounds`](Primitive::clip_bounds), which clips a
+    /// [`Triangle`](crate::Triangle) to the box in `f64` (a triangle beside the box, whose
+    /// bounding box meets it, is not reported) and falls back to the bounding box for types that do not clip.
     /// [`Sphere`](crate::Sphere) measures its distance from the box. Structures prune with
     /// boxes that contain each primitive's [`clip_bounds`](Primitive::clip_bounds) within them,
     /// so the answer must imply that `clip_bounds(b)` is `Some`.

@@ -28,6 +28,26 @@ pub struct PointHit {
     pub point: Vec3,
     /// The distance from the query point to `point` ([`point_distance`]).
     pub distance: f32,
+    /// The part of the primitive `point` lies on ([`Primitive::closest_feature`]): a
+    /// triangle's face, one of its edges or one of its vertices. A signed distance takes its
+    /// sign from the normal of this feature (Bærentzen & Aanæs 2005: a vertex's or an edge's
+    /// normal is the angle-weighted mean of the faces around it).
+    pub feature: Feature,
+}
+
+/// The part of a primitive a closest point lies on: its face (the interior of a triangle, and
+/// all of a smooth surface such as a sphere), an edge or a vertex.
+///
+/// A triangle numbers its vertices as it stores them (`v0`, `v1`, `v2`) and its edges by their
+/// first vertex: edge 0 is `v0 v1`, edge 1 is `v1 v2`, edge 2 is `v2 v0`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Feature {
+    /// The interior of the surface.
+    Face,
+    /// Edge `k` (0, 1 or 2).
+    Edge(u8),
+    /// Vertex `k` (0, 1 or 2).
+    Vertex(u8),
 }
 
 impl PointHit {
@@ -38,14 +58,15 @@ impl PointHit {
         distance < best_distance || (distance == best_distance && prim < best_prim)
     }
 
-    /// Whether two answers agree: both none, or the same primitive at distances equal or within
-    /// a relative `1e-5`. The equality the conformance kit and `compare` use.
+    /// Whether two answers agree: both none, or the same primitive and feature at distances
+    /// equal or within a relative `1e-5`. The equality the conformance kit and `compare` use.
     pub fn agree(a: Option<PointHit>, b: Option<PointHit>) -> bool {
         match (a, b) {
             (None, None) => true,
             (Some(a), Some(b)) => {
                 let scale = a.distance.abs().max(b.distance.abs());
                 a.prim == b.prim
+                    && a.feature == b.feature
                     && (a.distance == b.distance || (a.distance - b.distance).abs() <= 1e-5 * scale)
             }
             _ => false,
@@ -86,6 +107,23 @@ pub fn point_distance(a: Vec3, b: Vec3) -> f32 {
 /// assert_eq!(q, Vec3::new(0.5, 0.5, 0.0)); // on the long edge
 /// ```
 pub fn closest_point_on_triangle(v0: Vec3, e1: Vec3, e2: Vec3, p: Vec3) -> Vec3 {
+    closest_feature_on_triangle(v0, e1, e2, p).0
+}
+
+/// [`closest_point_on_triangle`], with the [`Feature`] of the triangle the point lies on: the
+/// Voronoi region the point fell in (a degenerate triangle's answer is always on an edge).
+///
+/// ```
+/// use rt_core::{Feature, closest_feature_on_triangle, glam::Vec3};
+/// let (v0, e1, e2) = (Vec3::ZERO, Vec3::X, Vec3::Y);
+/// let face = closest_feature_on_triangle(v0, e1, e2, Vec3::new(0.25, 0.25, 2.0));
+/// assert_eq!(face, (Vec3::new(0.25, 0.25, 0.0), Feature::Face));
+/// let long_edge = closest_feature_on_triangle(v0, e1, e2, Vec3::new(5.0, 5.0, 0.0));
+/// assert_eq!(long_edge, (Vec3::new(0.5, 0.5, 0.0), Feature::Edge(1)));
+/// let corner = closest_feature_on_triangle(v0, e1, e2, Vec3::new(-1.0, -1.0, 0.0));
+/// assert_eq!(corner, (Vec3::ZERO, Feature::Vertex(0)));
+/// ```
+pub fn closest_feature_on_triangle(v0: Vec3, e1: Vec3, e2: Vec3, p: Vec3) -> (Vec3, Feature) {
     let (a, ab, ac) = (v0.as_dvec3(), e1.as_dvec3(), e2.as_dvec3());
     let ap = p.as_dvec3() - a;
     let ratio = |num: f64, den: f64| {
@@ -100,17 +138,17 @@ pub fn closest_point_on_triangle(v0: Vec3, e1: Vec3, e2: Vec3, p: Vec3) -> Vec3 
     let segment = |s: DVec3, d: DVec3| s + ratio((ap - s).dot(d), d.dot(d)) * d;
     let edges = || {
         [
-            segment(DVec3::ZERO, ab),
-            segment(DVec3::ZERO, ac),
-            segment(ab, ac - ab),
+            (segment(DVec3::ZERO, ab), Feature::Edge(0)),
+            (segment(DVec3::ZERO, ac), Feature::Edge(2)),
+            (segment(ab, ac - ab), Feature::Edge(1)),
         ]
         .into_iter()
-        .min_by(|x, y| {
+        .min_by(|(x, _), (y, _)| {
             (ap - *x)
                 .length_squared()
                 .total_cmp(&(ap - *y).length_squared())
         })
-        .map_or(v0, |q| (a + q).as_vec3())
+        .map_or((v0, Feature::Edge(0)), |(q, f)| ((a + q).as_vec3(), f))
     };
     if ab.cross(ac) == DVec3::ZERO {
         return edges();
@@ -118,32 +156,35 @@ pub fn closest_point_on_triangle(v0: Vec3, e1: Vec3, e2: Vec3, p: Vec3) -> Vec3 
     let d1 = ab.dot(ap);
     let d2 = ac.dot(ap);
     if d1 <= 0.0 && d2 <= 0.0 {
-        return v0; // vertex region of v0
+        return (v0, Feature::Vertex(0)); // vertex region of v0
     }
     let bp = ap - ab;
     let d3 = ab.dot(bp);
     let d4 = ac.dot(bp);
     if d3 >= 0.0 && d4 <= d3 {
-        return (a + ab).as_vec3(); // vertex region of v1
+        return ((a + ab).as_vec3(), Feature::Vertex(1)); // vertex region of v1
     }
     let vc = d1 * d4 - d3 * d2;
     if vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0 {
-        return (a + ratio(d1, d1 - d3) * ab).as_vec3(); // edge v0 v1
+        return ((a + ratio(d1, d1 - d3) * ab).as_vec3(), Feature::Edge(0)); // edge v0 v1
     }
     let cp = ap - ac;
     let d5 = ab.dot(cp);
     let d6 = ac.dot(cp);
     if d6 >= 0.0 && d5 <= d6 {
-        return (a + ac).as_vec3(); // vertex region of v2
+        return ((a + ac).as_vec3(), Feature::Vertex(2)); // vertex region of v2
     }
     let vb = d5 * d2 - d1 * d6;
     if vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0 {
-        return (a + ratio(d2, d2 - d6) * ac).as_vec3(); // edge v0 v2
+        return ((a + ratio(d2, d2 - d6) * ac).as_vec3(), Feature::Edge(2)); // edge v0 v2
     }
     let va = d3 * d6 - d5 * d4;
     let (e, f) = (d4 - d3, d5 - d6);
     if va <= 0.0 && e >= 0.0 && f >= 0.0 {
-        return (a + ab + ratio(e, e + f) * (ac - ab)).as_vec3(); // edge v1 v2
+        return (
+            (a + ab + ratio(e, e + f) * (ac - ab)).as_vec3(),
+            Feature::Edge(1),
+        ); // edge v1 v2
     }
     let denom = va + vb + vc;
     if !(denom > 0.0 && denom.is_finite()) {
@@ -152,7 +193,7 @@ pub fn closest_point_on_triangle(v0: Vec3, e1: Vec3, e2: Vec3, p: Vec3) -> Vec3 
     }
     let v = (vb / denom).clamp(0.0, 1.0);
     let w = (vc / denom).clamp(0.0, 1.0 - v);
-    (a + v * ab + w * ac).as_vec3()
+    ((a + v * ab + w * ac).as_vec3(), Feature::Face)
 }
 
 /// What a closest-point traversal ([`Accel::ball_query`](crate::Accel::ball_query)) works
@@ -307,12 +348,12 @@ impl<P: Primitive> BallQuery<P> for ClosestPointQuery {
 
     #[inline]
     fn test(&mut self, prim: &P, id: u32) {
-        self.offer(prim.closest_point(self.center), id);
+        self.offer(prim.closest_feature(self.center), id);
     }
 
     #[inline]
     fn test_triangle(&mut self, v0: Vec3, e1: Vec3, e2: Vec3, id: u32) {
-        self.offer(closest_point_on_triangle(v0, e1, e2, self.center), id);
+        self.offer(closest_feature_on_triangle(v0, e1, e2, self.center), id);
     }
 }
 
@@ -320,7 +361,7 @@ impl ClosestPointQuery {
     /// Keeps primitive `id`'s nearest point if it is within the maximum distance and beats the
     /// best so far, and shrinks the ball to it.
     #[inline]
-    fn offer(&mut self, point: Vec3, id: u32) {
+    fn offer(&mut self, (point, feature): (Vec3, Feature), id: u32) {
         let distance = point_distance(self.center, point);
         let better = match self.best {
             None => true,
@@ -331,6 +372,7 @@ impl ClosestPointQuery {
                 prim: id,
                 point,
                 distance,
+                feature,
             });
             self.set_radius(distance);
         }
@@ -340,6 +382,34 @@ impl ClosestPointQuery {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn each_voronoi_region_names_its_feature() {
+        let (v0, v1, v2) = (
+            Vec3::ZERO,
+            Vec3::new(2.0, 0.0, 0.0),
+            Vec3::new(0.0, 2.0, 0.0),
+        );
+        let f = |p: Vec3| closest_feature_on_triangle(v0, v1 - v0, v2 - v0, p);
+        let lift = Vec3::new(0.0, 0.0, 3.0);
+        assert_eq!(
+            f(Vec3::new(0.5, 0.5, 0.0) + lift),
+            (Vec3::new(0.5, 0.5, 0.0), Feature::Face)
+        );
+        assert_eq!(f(Vec3::new(-1.0, -1.0, 1.0)), (v0, Feature::Vertex(0)));
+        assert_eq!(f(Vec3::new(3.0, -1.0, 1.0)), (v1, Feature::Vertex(1)));
+        assert_eq!(f(Vec3::new(-1.0, 3.0, 1.0)), (v2, Feature::Vertex(2)));
+        let on = |p: Vec3, feature| (p, feature);
+        assert_eq!(f(Vec3::new(1.0, -1.0, 1.0)), on(Vec3::X, Feature::Edge(0)));
+        assert_eq!(
+            f(Vec3::new(2.0, 2.0, 0.0)),
+            on(Vec3::new(1.0, 1.0, 0.0), Feature::Edge(1))
+        );
+        assert_eq!(f(Vec3::new(-1.0, 1.0, 1.0)), on(Vec3::Y, Feature::Edge(2)));
+        // A degenerate (collinear) triangle answers on an edge.
+        let (_, feature) = closest_feature_on_triangle(v0, Vec3::X, Vec3::X * 2.0, Vec3::Y);
+        assert!(matches!(feature, Feature::Edge(_)), "{feature:?}");
+    }
     use crate::{Rng, Triangle};
 
     /// The nearest of many points sampled on the triangle: an upper bound the exact answer must

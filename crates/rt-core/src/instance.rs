@@ -36,8 +36,8 @@
 //! both (`rt_conformance::check_two_level_case`).
 
 use crate::{
-    Aabb, BallQuery, Counters, DynAccel, Hit, MtTriangle, NoStats, Primitive, Ray, Stats, Triangle,
-    closest_point_on_triangle, point_distance,
+    Aabb, BallQuery, Counters, DynAccel, Feature, Hit, MtTriangle, NoStats, Primitive, Ray, Stats,
+    Triangle, closest_feature_on_triangle, point_distance,
 };
 use glam::{Affine3A, DMat3, DVec3, Mat3A, Vec3, Vec3A};
 use std::fmt::Debug;
@@ -268,7 +268,20 @@ pub fn closest_point_on_transformed_triangle(
     e2: Vec3,
     p: Vec3,
 ) -> Vec3 {
-    closest_point_on_triangle(
+    closest_feature_on_transformed_triangle(to_world, v0, e1, e2, p).0
+}
+
+/// [`closest_point_on_transformed_triangle`], with the [`Feature`] the point lies on (an affine
+/// map keeps a triangle's faces, edges and vertices).
+#[inline]
+pub fn closest_feature_on_transformed_triangle(
+    to_world: &Affine3A,
+    v0: Vec3,
+    e1: Vec3,
+    e2: Vec3,
+    p: Vec3,
+) -> (Vec3, Feature) {
+    closest_feature_on_triangle(
         to_world.transform_point3(v0),
         to_world.transform_vector3(e1),
         to_world.transform_vector3(e2),
@@ -287,12 +300,23 @@ pub trait TransformPrimitive: Primitive {
     /// through [`closest_point_on_transformed_triangle`] for primitives whose
     /// [`Primitive::as_triangle`] is `Some`.
     fn closest_point_transformed(&self, to_world: &Affine3A, p: Vec3) -> Vec3;
+
+    /// [`closest_point_transformed`](TransformPrimitive::closest_point_transformed), with the
+    /// feature the point lies on; the default calls it the face.
+    #[inline]
+    fn closest_feature_transformed(&self, to_world: &Affine3A, p: Vec3) -> (Vec3, Feature) {
+        (self.closest_point_transformed(to_world, p), Feature::Face)
+    }
 }
 
 impl TransformPrimitive for Triangle {
     #[inline]
     fn closest_point_transformed(&self, to_world: &Affine3A, p: Vec3) -> Vec3 {
-        closest_point_on_transformed_triangle(
+        self.closest_feature_transformed(to_world, p).0
+    }
+    #[inline]
+    fn closest_feature_transformed(&self, to_world: &Affine3A, p: Vec3) -> (Vec3, Feature) {
+        closest_feature_on_transformed_triangle(
             to_world,
             self.v0,
             self.v1 - self.v0,
@@ -306,6 +330,10 @@ impl TransformPrimitive for MtTriangle {
     #[inline]
     fn closest_point_transformed(&self, to_world: &Affine3A, p: Vec3) -> Vec3 {
         self.0.closest_point_transformed(to_world, p)
+    }
+    #[inline]
+    fn closest_feature_transformed(&self, to_world: &Affine3A, p: Vec3) -> (Vec3, Feature) {
+        self.0.closest_feature_transformed(to_world, p)
     }
 }
 
@@ -527,6 +555,8 @@ pub struct InstancePointHit {
     pub point: Vec3,
     /// Its distance from the query point ([`point_distance`]).
     pub distance: f32,
+    /// The part of the primitive it lies on ([`PointHit::feature`](crate::PointHit)).
+    pub feature: Feature,
 }
 
 impl InstancePointHit {
@@ -537,6 +567,7 @@ impl InstancePointHit {
             prim: h.prim,
             point: h.point,
             distance: h.distance,
+            feature: h.feature,
         };
         match (a, b) {
             (None, None) => true,
@@ -614,7 +645,7 @@ impl InstancePointQuery {
     /// Keeps `point` of primitive `prim` of instance `instance` if it is near enough and beats
     /// the best so far.
     #[inline]
-    fn offer(&mut self, point: Vec3, instance: u32, prim: u32) {
+    fn offer(&mut self, (point, feature): (Vec3, Feature), instance: u32, prim: u32) {
         let distance = point_distance(self.center, point);
         let better = self.best.is_none_or(|b| {
             distance < b.distance
@@ -627,6 +658,7 @@ impl InstancePointQuery {
                 prim,
                 point,
                 distance,
+                feature,
             });
             self.set_radius(distance);
         }
@@ -671,14 +703,14 @@ impl<P: TransformPrimitive> BallQuery<P> for ObjectBall<'_, P> {
     }
     #[inline]
     fn test(&mut self, prim: &P, id: u32) {
-        let point = prim.closest_point_transformed(&self.to_world, self.query.center);
+        let point = prim.closest_feature_transformed(&self.to_world, self.query.center);
         self.query.offer(point, self.index, id);
         self.update();
     }
     #[inline]
     fn test_triangle(&mut self, v0: Vec3, e1: Vec3, e2: Vec3, id: u32) {
         let point =
-            closest_point_on_transformed_triangle(&self.to_world, v0, e1, e2, self.query.center);
+            closest_feature_on_transformed_triangle(&self.to_world, v0, e1, e2, self.query.center);
         self.query.offer(point, self.index, id);
         self.update();
     }

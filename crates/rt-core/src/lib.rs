@@ -114,7 +114,8 @@ pub use brute::BruteForce;
 pub use bundle::{BUNDLE_LANES, Bundle, LaneBounds};
 pub use clip::{clip_triangle_bounds, split_triangle_bounds};
 pub use closest::{
-    BallQuery, ClosestPointQuery, PointHit, closest_point_on_triangle, point_distance,
+    BallQuery, ClosestPointQuery, Feature, PointHit, closest_feature_on_triangle,
+    closest_point_on_triangle, point_distance,
 };
 pub use cost::{PredictedCost, predicted_cost};
 pub use dyn_accel::DynAccel;
@@ -122,7 +123,7 @@ pub use geometry::{Geometry, IndexedTriangles};
 pub use instance::{
     Instance, InstanceError, InstanceHit, InstancePointHit, InstancePointQuery, InstanceTransform,
     LinearInstances, TransformPrimitive, TwoLevel, bottom_bytes,
-    closest_point_on_transformed_triangle, scene_margins,
+    closest_feature_on_transformed_triangle, closest_point_on_transformed_triangle, scene_margins,
 };
 pub use mailbox::{Mailbox, Visited};
 pub use mesh::{Mesh, MeshError, Shading};

@@ -108,6 +108,15 @@ pub trait Primitive: Clone + Send + Sync + Debug + 'static {
     /// [`Triangle`]: crate::Triangle
     fn closest_point(&self, p: Vec3) -> Vec3;
 
+    /// [`closest_point`](Primitive::closest_point), with the part of the primitive the point
+    /// lies on: what [`PointHit::feature`](crate::PointHit) reports. The default calls every
+    /// point a [`Feature::Face`](crate::Feature), right for smooth surfaces;
+    /// [`Triangle`](crate::Triangle) names its edges and vertices.
+    #[inline]
+    fn closest_feature(&self, p: Vec3) -> (Vec3, crate::Feature) {
+        (self.closest_point(p), crate::Feature::Face)
+    }
+
     /// The primitive as a plain triangle and the test its [`intersect`](Primitive::intersect)
     /// runs, if it is one; `None` (the default) otherwise.
     ///

@@ -107,6 +107,14 @@ impl Primitive for Shape {
     }
 
     #[inline]
+    fn closest_feature(&self, p: Vec3) -> (Vec3, crate::Feature) {
+        match self {
+            Shape::Triangle(t) => t.closest_feature(p),
+            Shape::Sphere(s) => s.closest_feature(p),
+        }
+    }
+
+    #[inline]
     fn as_triangle(&self) -> Option<(Triangle, TriangleTest)> {
         match self {
             Shape::Triangle(t) => t.as_triangle(),

@@ -264,7 +264,12 @@ impl Primitive for Triangle {
     /// `v1 - v0` and `v2 - v0`.
     #[inline]
     fn closest_point(&self, p: Vec3) -> Vec3 {
-        crate::closest_point_on_triangle(self.v0, self.v1 - self.v0, self.v2 - self.v0, p)
+        self.closest_feature(p).0
+    }
+
+    #[inline]
+    fn closest_feature(&self, p: Vec3) -> (Vec3, crate::Feature) {
+        crate::closest_feature_on_triangle(self.v0, self.v1 - self.v0, self.v2 - self.v0, p)
     }
 
     /// The point interpolated from the vertices with the barycentrics `u`, `v` (not
@@ -352,6 +357,10 @@ impl Primitive for MtTriangle {
     #[inline]
     fn closest_point(&self, p: Vec3) -> Vec3 {
         self.0.closest_point(p)
+    }
+    #[inline]
+    fn closest_feature(&self, p: Vec3) -> (Vec3, crate::Feature) {
+        self.0.closest_feature(p)
     }
     #[inline]
     fn surface(&self, _ray: &Ray, _t: f32, u: f32, v: f32) -> SurfacePoint {

@@ -445,6 +445,7 @@ impl<T: TwoLevel<Triangle>> Field<T> {
             prim: h.instance * self.mesh.len() as u32 + h.prim,
             point: h.point,
             distance: h.distance,
+            feature: h.feature,
         })
     }
 }

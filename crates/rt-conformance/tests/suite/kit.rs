@@ -693,3 +693,51 @@ fn the_default_box_query_through_the_ball_passes_the_kit() {
             .unwrap_or_else(|e| panic!("{name}: {e}"));
     }
 }
+
+/// Brute force whose closest-point queries see every triangle with its vertices rotated
+/// (`v1, v2, v0`): the nearest points are the same places, but the edges and vertices they lie
+/// on are numbered wrongly, as a structure that stored triangles in another vertex order would
+/// report them.
+struct Rotated(BruteForce<Triangle>);
+
+impl Accel for Rotated {
+    forward_to_brute_force!();
+    const NAME: &'static str = "rotated";
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        self.0.intersect_with(ray, stats)
+    }
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.ball_query(&mut RotatedBall(query), stats);
+    }
+    fn box_query<Q: BoxQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.box_query(query, stats);
+    }
+}
+
+struct RotatedBall<'a, Q>(&'a mut Q);
+
+impl<Q: BallQuery<Triangle>> BallQuery<Triangle> for RotatedBall<'_, Q> {
+    fn center(&self) -> Vec3 {
+        self.0.center()
+    }
+    fn radius_sq(&self) -> f32 {
+        self.0.radius_sq()
+    }
+    fn test(&mut self, t: &Triangle, id: u32) {
+        self.0.test(&Triangle::new(t.v1, t.v2, t.v0), id);
+    }
+    fn test_triangle(&mut self, v0: Vec3, e1: Vec3, e2: Vec3, id: u32) {
+        self.test(&Triangle::new(v0, v0 + e1, v0 + e2), id);
+    }
+}
+
+#[test]
+fn a_closest_point_on_the_wrong_feature_fails_the_kit() {
+    let s = scene("shared_edge");
+    let e = check_case_within::<Rotated>(&(), &s.triangles, &s.rays, STALL_LIMIT)
+        .expect_err("edges and vertices numbered from the wrong vertex must be caught");
+    assert!(
+        e.contains("closest_point disagrees with brute force") && e.contains("feature"),
+        "{e}"
+    );
+}

@@ -8,6 +8,18 @@ use rt_core::glam::Vec3;
 use rt_core::{Aabb, BallQuery, Primitive, Stats, TriangleTest};
 
 impl<P: Primitive> Bvh<P> {
+    /// The primitives of a leaf's item range with their input indices: what the ball and box
+    /// queries offer from a leaf that holds primitives rather than triangle packs.
+    #[inline]
+    pub(crate) fn leaf_prims(
+        &self,
+        items: std::ops::Range<usize>,
+    ) -> impl Iterator<Item = (&P, u32)> {
+        self.primitives()[items.clone()]
+            .iter()
+            .zip(self.primitive_ids()[items].iter().copied())
+    }
+
     /// The box around everything in the tree.
     pub(crate) fn root_bounds(&self) -> Aabb {
         if let Some(root) = self.nodes().first() {
@@ -36,10 +48,7 @@ impl<P: Primitive> Bvh<P> {
             let node = &nodes[current];
             if node.is_leaf() {
                 let range = node.prim_range();
-                for (prim, &id) in self.primitives()[range.clone()]
-                    .iter()
-                    .zip(&self.primitive_ids()[range])
-                {
+                for (prim, id) in self.leaf_prims(range) {
                     stats.prim_test();
                     q.test(prim, id);
                 }
@@ -136,10 +145,7 @@ impl<P: Primitive> Bvh<P> {
         stats: &mut S,
     ) {
         let Some(test) = self.pack_test().filter(|_| !self.packs().is_empty()) else {
-            for (prim, &id) in self.primitives()[items.clone()]
-                .iter()
-                .zip(&self.primitive_ids()[items])
-            {
+            for (prim, id) in self.leaf_prims(items) {
                 stats.prim_test();
                 q.test(prim, id);
             }
@@ -148,13 +154,7 @@ impl<P: Primitive> Bvh<P> {
         for pack in &self.packs()[items] {
             for lane in 0..pack.len() {
                 stats.prim_test();
-                let row = |k: usize| {
-                    Vec3::new(
-                        pack.rows[3 * k][lane],
-                        pack.rows[3 * k + 1][lane],
-                        pack.rows[3 * k + 2][lane],
-                    )
-                };
+                let row = |k: usize| pack.row(k, lane);
                 // Watertight packs hold the vertices, Möller–Trumbore packs the vertex and
                 // edges, each computed as `Triangle::closest_point` computes them.
                 let (v0, e1, e2) = match test {

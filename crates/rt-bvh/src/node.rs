@@ -1,6 +1,7 @@
 //! The flattened node layouts: the binary [`Node`], the 8-wide [`WideNode`] and the triangle
 //! [`TriPack`] its leaves point to.
 
+use rt_core::glam::Vec3;
 use rt_core::{Aabb, Triangle, TriangleTest};
 
 rt_core::pod_struct! {
@@ -173,6 +174,17 @@ rt_core::pod_struct! {
 const _: () = assert!(std::mem::size_of::<TriPack>() == 160);
 
 impl TriPack {
+    /// Row triple `k` (0, 1 or 2) of `lane` as a vector: vertex `k` of a watertight pack; the
+    /// first vertex, then the two edges, of a Möller–Trumbore pack.
+    #[inline(always)]
+    pub fn row(&self, k: usize, lane: usize) -> Vec3 {
+        Vec3::new(
+            self.rows[3 * k][lane],
+            self.rows[3 * k + 1][lane],
+            self.rows[3 * k + 2][lane],
+        )
+    }
+
     /// A pack of up to four `(triangle, input index)` pairs for `test`.
     pub fn new(tris: &[(Triangle, u32)], test: TriangleTest) -> Self {
         debug_assert!(tris.len() <= PACK);

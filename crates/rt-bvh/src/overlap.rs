@@ -39,10 +39,7 @@ impl<P: Primitive> Bvh<P> {
             let node = &nodes[current];
             if node.is_leaf() {
                 let range = node.prim_range();
-                for (prim, &id) in self.primitives()[range.clone()]
-                    .iter()
-                    .zip(&self.primitive_ids()[range])
-                {
+                for (prim, id) in self.leaf_prims(range) {
                     stats.prim_test();
                     q.test(prim, id)?;
                 }
@@ -121,10 +118,7 @@ impl<P: Primitive> Bvh<P> {
         stats: &mut S,
     ) -> ControlFlow<()> {
         let Some(test) = self.pack_test().filter(|_| !self.packs().is_empty()) else {
-            for (prim, &id) in self.primitives()[items.clone()]
-                .iter()
-                .zip(&self.primitive_ids()[items])
-            {
+            for (prim, id) in self.leaf_prims(items) {
                 stats.prim_test();
                 q.test(prim, id)?;
             }
@@ -133,13 +127,7 @@ impl<P: Primitive> Bvh<P> {
         for pack in &self.packs()[items] {
             for lane in 0..pack.len() {
                 stats.prim_test();
-                let row = |k: usize| {
-                    Vec3::new(
-                        pack.rows[3 * k][lane],
-                        pack.rows[3 * k + 1][lane],
-                        pack.rows[3 * k + 2][lane],
-                    )
-                };
+                let row = |k: usize| pack.row(k, lane);
                 let v = match test {
                     TriangleTest::Watertight => [row(0), row(1), row(2)],
                     TriangleTest::MollerTrumbore => [row(0), row(0) + row(1), row(0) + row(2)],

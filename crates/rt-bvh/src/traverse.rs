@@ -362,13 +362,7 @@ impl Leaves for ScalarPacks<'_> {
         for pack in &self.packs[items] {
             for lane in 0..pack.len() {
                 stats.prim_test();
-                let row = |k: usize| {
-                    rt_core::glam::Vec3::new(
-                        pack.rows[3 * k][lane],
-                        pack.rows[3 * k + 1][lane],
-                        pack.rows[3 * k + 2][lane],
-                    )
-                };
+                let row = |k: usize| pack.row(k, lane);
                 let hit = match self.test {
                     TriangleTest::Watertight => Triangle::new(row(0), row(1), row(2))
                         .intersect_sheared(&r.shear, ray, best.t),

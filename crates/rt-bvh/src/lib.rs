@@ -214,7 +214,7 @@ pub use node::{ChildRef, Node, PACK, TriPack, WIDTH, WideNode};
 pub use rt_core::ValidationError;
 
 use rt_core::bundle::{Bundle, Lanes};
-use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, Stats, TriangleTest};
+use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, RayQuery, Stats, TriangleTest};
 use simd::Isa;
 use traverse::{Packs, Prims, ScalarPacks};
 
@@ -567,21 +567,27 @@ impl<P: Primitive> Bvh<P> {
         true
     }
 
-    /// The query core shared by [`Accel::intersect_with`] and [`Accel::occluded_with`].
+    /// The query core behind [`Accel::ray_query`], [`Accel::intersect_with`] and
+    /// [`Accel::occluded_with`]: the tree's walk for `q`, which sees each stored triangle once
+    /// (bit-identical copies left out of the tree are [`Accel::ray_query`]'s to add).
     #[inline(always)]
-    fn query<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+    fn query<S: Stats, Q: RayQuery>(&self, ray: &Ray, q: &mut Q, stats: &mut S) {
         // Outside the precondition (NaN, huge origins, ...): answer at once, walk nothing.
         if !ray.is_valid() {
-            return None;
+            return;
         }
         match &self.tree {
-            Tree::Binary { nodes, items } => {
-                traverse::binary::<P, S, ANY>(nodes, items, ray, stats)
-            }
-            Tree::Wide(w) if w.nodes.is_empty() => None,
+            Tree::Binary { nodes, items } => traverse::binary(nodes, items, ray, q, stats),
+            Tree::Wide(w) if w.nodes.is_empty() => {}
             // Occlusion through the closest-hit traversal: only to measure the any-hit path.
-            Tree::Wide(w) if ANY && !w.ablation.any_hit_path => w.walk::<S, false>(ray, stats),
-            Tree::Wide(w) => w.walk::<S, ANY>(ray, stats),
+            Tree::Wide(w) if Q::OCCLUSION && !w.ablation.any_hit_path => {
+                let mut closest = rt_core::ClosestHit::new(ray);
+                w.walk(ray, &mut closest, stats);
+                if let Some(hit) = closest.hit() {
+                    let _ = q.offer(hit.prim, rt_core::query::BLOCKS);
+                }
+            }
+            Tree::Wide(w) => w.walk(ray, q, stats),
         }
     }
 }
@@ -617,7 +623,7 @@ impl<P: Primitive> Bvh<P> {
                     rays,
                     slots,
                     stats,
-                    |ray, stats| self.query::<S, ANY>(ray, stats),
+                    |ray, stats| rt_core::bundle::single::<_, S, ANY>(self, ray, stats),
                     |b| b.route(&bounds, coherent),
                     // Inlined, so that the walk is compiled with the vector instructions `walk_groups` runs
                     // with (`Isa::run`).
@@ -633,7 +639,7 @@ impl<P: Primitive> Bvh<P> {
             _ => {
                 for (slot, ray) in rays.iter().enumerate() {
                     stats.single_ray();
-                    answer(slot, self.query::<S, ANY>(ray, stats));
+                    answer(slot, rt_core::bundle::single::<_, S, ANY>(self, ray, stats));
                 }
                 return;
             }
@@ -643,7 +649,7 @@ impl<P: Primitive> Bvh<P> {
             rays,
             slots,
             stats,
-            |ray, stats| self.query::<S, ANY>(ray, stats),
+            |ray, stats| rt_core::bundle::single::<_, S, ANY>(self, ray, stats),
             |b| b.route(&bounds, coherent),
             |b, lanes, stats| {
                 wide.bundle::<S, ANY>(b, lanes, stats);
@@ -664,17 +670,18 @@ trait LeafWalk {
 
 /// One ray through [`traverse::wide`].
 /// `sort`: whether a closest-hit ray sorts the children it enters ([`Ablation::sort_children`]).
-struct OneRay<'a, S, const ANY: bool> {
+struct OneRay<'a, S, Q> {
     ray: &'a Ray,
     sort: bool,
+    q: &'a mut Q,
     stats: &'a mut S,
 }
 
-impl<S: Stats, const ANY: bool> LeafWalk for OneRay<'_, S, ANY> {
-    type Out = Option<Hit>;
+impl<S: Stats, Q: RayQuery> LeafWalk for OneRay<'_, S, Q> {
+    type Out = ();
     #[inline(always)]
-    fn walk<L: traverse::Leaves>(self, nodes: &[WideNode], isa: Isa, leaves: &L) -> Option<Hit> {
-        simd::dispatch::<_, S, ANY>(isa, nodes, leaves, self.ray, self.sort, self.stats)
+    fn walk<L: traverse::Leaves>(self, nodes: &[WideNode], isa: Isa, leaves: &L) {
+        simd::dispatch(isa, nodes, leaves, self.ray, self.sort, self.q, self.stats)
     }
 }
 
@@ -749,10 +756,11 @@ impl<P: Primitive> Wide<P> {
 
     /// The wide traversal with this tree's leaves, kernels and child ordering.
     #[inline(always)]
-    fn walk<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        self.with_leaves(OneRay::<S, ANY> {
+    fn walk<S: Stats, Q: RayQuery>(&self, ray: &Ray, q: &mut Q, stats: &mut S) {
+        self.with_leaves(OneRay {
             ray,
             sort: self.ablation.sort_children,
+            q,
             stats,
         })
     }
@@ -830,14 +838,36 @@ impl<P: Primitive> Accel for Bvh<P> {
         bvh
     }
 
+    /// The tree's walk; bit-identical copies of a stored triangle, which the tree stores once,
+    /// are offered with it.
     #[inline]
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        self.query::<S, false>(ray, stats)
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        if self.input.twins.is_empty() {
+            self.query(ray, query, stats);
+        } else {
+            self.query(
+                ray,
+                &mut overlap::WithCopies::new(query, &self.input.twins),
+                stats,
+            );
+        }
     }
 
+    /// The tree's walk alone: a copy of a stored triangle has a larger index and the same hit,
+    /// so it never beats the stored one.
+    #[inline]
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        let mut q = rt_core::ClosestHit::new(ray);
+        self.query(ray, &mut q, stats);
+        q.hit()
+    }
+
+    /// The tree's walk alone: a copy blocks exactly where its stored triangle does.
     #[inline]
     fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.query::<S, true>(ray, stats).is_some()
+        let mut q = rt_core::AnyHit::new(ray);
+        self.query(ray, &mut q, stats);
+        q.occluded()
     }
 
     /// Coherent rays of the wide tree walk it in bundles (`bundle.rs`); see
@@ -865,7 +895,7 @@ impl<P: Primitive> Accel for Bvh<P> {
                 Tree::Binary { nodes, items } if ray.is_valid() => {
                     traverse::binary_into::<P, S>(nodes, items, ray, stats, slot)
                 }
-                _ => *slot = self.query::<S, false>(ray, stats),
+                _ => *slot = self.intersect_with(ray, stats),
             }
             return;
         }
@@ -876,7 +906,7 @@ impl<P: Primitive> Accel for Bvh<P> {
     fn occluded_bundle_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
         if let ([ray], [slot]) = (rays, &mut *out) {
             stats.single_ray();
-            *slot = self.query::<S, true>(ray, stats).is_some();
+            *slot = self.occluded_with(ray, stats);
             return;
         }
         self.bundle_query::<S, true>(rays, out.len(), stats, |slot, hit| {

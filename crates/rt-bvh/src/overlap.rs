@@ -4,7 +4,7 @@ use crate::node::{ChildRef, WIDTH, WideNode};
 use crate::traverse::WIDE_STACK;
 use crate::{Bvh, Layout, MAX_DEPTH};
 use rt_core::glam::Vec3;
-use rt_core::{Aabb, BoxQuery, Primitive, Stack, Stats, TriangleTest};
+use rt_core::{Aabb, BoxQuery, PrimHit, Primitive, RayQuery, Stack, Stats, TriangleTest};
 use std::ops::ControlFlow;
 
 impl<P: Primitive> Bvh<P> {
@@ -155,9 +155,10 @@ fn meeting(node: &WideNode, b: &Aabb) -> u32 {
     mask
 }
 
-/// A box query that offers, after each stored triangle, its bit-identical copies, which the
-/// tree leaves out (the lowest index of a set of copies is stored, and ray queries only ever
-/// report that one). Counts the copies it offers, for the caller's statistics.
+/// A box or ray query that is offered, after each stored triangle, its bit-identical copies,
+/// which the tree leaves out (the lowest index of a set of copies is stored, which is all a
+/// closest or any hit ever reports; filters and all hits want the copies too). Counts the
+/// copies it offers, for the caller's statistics.
 pub(crate) struct WithCopies<'a, Q> {
     query: &'a mut Q,
     /// `(stored, copy)` pairs, ascending.
@@ -205,5 +206,20 @@ impl<P, Q: BoxQuery<P>> BoxQuery<P> for WithCopies<'_, Q> {
     fn test_triangle(&mut self, v: [Vec3; 3], id: u32) -> ControlFlow<()> {
         self.query.test_triangle(v, id)?;
         self.copies(id, |q, copy| q.test_triangle(v, copy))
+    }
+}
+
+/// A copy's hit is its stored triangle's, bit for bit: the same vertices, the same test.
+impl<Q: RayQuery> RayQuery for WithCopies<'_, Q> {
+    const OCCLUSION: bool = Q::OCCLUSION;
+    const REPEATABLE: bool = Q::REPEATABLE;
+    #[inline]
+    fn t_far(&self) -> f32 {
+        self.query.t_far()
+    }
+    #[inline]
+    fn offer(&mut self, prim: u32, hit: PrimHit) -> ControlFlow<()> {
+        self.query.offer(prim, hit)?;
+        self.copies(prim, |q, copy| q.offer(copy, hit))
     }
 }

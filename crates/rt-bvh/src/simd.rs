@@ -20,7 +20,7 @@ use crate::kernels::Simd;
 use crate::node::WideNode;
 use crate::traverse::{Leaves, wide};
 use rt_core::bundle::{Bundle, Lanes};
-use rt_core::{Hit, Ray, Stats};
+use rt_core::{ClosestHit, Hit, Ray, RayQuery, Stats};
 
 /// The instruction set the wide traversal runs with.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -53,37 +53,39 @@ impl Isa {
 
 /// Runs the wide traversal with the instruction set `isa`.
 #[inline(always)]
-pub(crate) fn dispatch<L: Leaves, S: Stats, const ANY: bool>(
+pub(crate) fn dispatch<L: Leaves, S: Stats, Q: RayQuery>(
     isa: Isa,
     nodes: &[WideNode],
     leaves: &L,
     ray: &Ray,
     sort: bool,
+    q: &mut Q,
     stats: &mut S,
-) -> Option<Hit> {
+) {
     match isa {
         #[cfg(target_arch = "x86_64")]
         // SAFETY: an `Avx2` value exists only if `Avx2::detect` found AVX2 and FMA on this CPU,
         // which is all `wide_avx2` requires.
-        Isa::Avx2(simd) => unsafe { wide_avx2::<L, S, ANY>(simd, nodes, leaves, ray, sort, stats) },
+        Isa::Avx2(simd) => unsafe { wide_avx2(simd, nodes, leaves, ray, sort, q, stats) },
         #[cfg(target_arch = "x86_64")]
-        Isa::Sse2 => wide::<Sse2, L, S, ANY>(Sse2, nodes, leaves, ray, sort, stats),
-        Isa::Portable => wide::<Portable, L, S, ANY>(Portable, nodes, leaves, ray, sort, stats),
+        Isa::Sse2 => wide(Sse2, nodes, leaves, ray, sort, q, stats),
+        Isa::Portable => wide(Portable, nodes, leaves, ray, sort, q, stats),
     }
 }
 
 /// The wide traversal, compiled with AVX2 and FMA enabled so the intrinsics inline.
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-fn wide_avx2<L: Leaves, S: Stats, const ANY: bool>(
+fn wide_avx2<L: Leaves, S: Stats, Q: RayQuery>(
     simd: Avx2,
     nodes: &[WideNode],
     leaves: &L,
     ray: &Ray,
     sort: bool,
+    q: &mut Q,
     stats: &mut S,
-) -> Option<Hit> {
-    wide::<Avx2, L, S, ANY>(simd, nodes, leaves, ray, sort, stats)
+) {
+    wide(simd, nodes, leaves, ray, sort, q, stats);
 }
 
 /// [`dispatch`] for a closest hit written into `out`, the caller's slot: the path of a bundle of
@@ -112,7 +114,11 @@ pub(crate) fn dispatch_into<L: Leaves, S: Stats>(
         Isa::Avx2(simd) => unsafe {
             wide_avx2_into::<L, S>(simd, nodes, leaves, ray, sort, stats, out)
         },
-        _ => *out = dispatch::<L, S, false>(isa, nodes, leaves, ray, sort, stats),
+        _ => {
+            let mut q = ClosestHit::new(ray);
+            dispatch(isa, nodes, leaves, ray, sort, &mut q, stats);
+            *out = q.hit();
+        }
     }
 }
 
@@ -128,7 +134,9 @@ fn wide_avx2_into<L: Leaves, S: Stats>(
     stats: &mut S,
     out: &mut Option<Hit>,
 ) {
-    *out = wide::<Avx2, L, S, false>(simd, nodes, leaves, ray, sort, stats);
+    let mut q = ClosestHit::new(ray);
+    wide(simd, nodes, leaves, ray, sort, &mut q, stats);
+    *out = q.hit();
 }
 
 /// Runs the bundle traversal with the instruction set `isa`.

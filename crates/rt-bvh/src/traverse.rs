@@ -1,5 +1,6 @@
 //! The traversals: near-child-first over the binary tree, and over the wide tree with SIMD slab
-//! and triangle tests. Each has one generic core for closest-hit and any-hit queries.
+//! and triangle tests. Each has one generic core for every ray query ([`RayQuery`]): closest
+//! hit, any hit, filters, all hits.
 
 use crate::kernels::{self, BoxRay, RayData, Simd};
 use crate::node::Node;
@@ -8,31 +9,37 @@ use crate::{Items, MAX_DEPTH};
 use rt_core::Stack;
 use rt_core::bundle::Lanes;
 use rt_core::glam::Vec3;
+use rt_core::query::BLOCKS;
 use rt_core::trace::{self, Event, Place};
-use rt_core::{Hit, Primitive, Ray, SLAB_FAR_SCALE, Stats, Triangle, TriangleTest};
+use rt_core::{
+    AnyHit, ClosestHit, Hit, PrimHit, Primitive, Ray, RayQuery, SLAB_FAR_SCALE, Stats, Triangle,
+    TriangleTest, leaf,
+};
+use std::ops::ControlFlow;
 use std::ops::Range;
 
-/// The binary tree's traversal core. `ANY = false` finds the closest hit; `ANY = true` returns the first
-/// hit found (its `t` need not be the smallest).
+/// The binary tree's traversal core, for any query `Q`.
 ///
-/// At an interior node both children's boxes are tested against `[t_min, best_t]`; the
+/// At an interior node both children's boxes are tested against `[t_min, q.t_far()]`; the
 /// nearer child is visited next and the farther one is pushed with its entry distance, and
-/// skipped when popped if a hit closer than that entry has been found meanwhile
-/// (front-to-back traversal; the comparison allows [`SLAB_FAR_SCALE`] of rounding, as the box
-/// test does, so a primitive tying with the best hit is still found). The stack holds at most
+/// skipped when popped if the query's far end has come closer than that entry meanwhile (for a
+/// closest hit: a closer hit was found; front-to-back traversal; the comparison allows
+/// [`SLAB_FAR_SCALE`] of rounding, as the box test does, so a primitive tying with the best hit
+/// is still found). The stack holds at most
 /// one entry per tree level, and the builder bounds the depth by `MAX_DEPTH`, so a fixed
 /// array suffices.
 // PERF: kept out of line: inlined into the query beside every wide traversal, it ran 1.16x
 // (bunny) and 1.21x (sphereflake) slower than the same loop written alone; out of line it
 // runs 1.03x and 1.00x of it (`cargo bench -p rt-benches --bench stats -- stats-sink/`).
 #[inline(never)]
-pub(crate) fn binary<P: Primitive, S: Stats, const ANY: bool>(
+pub(crate) fn binary<P: Primitive, S: Stats, Q: RayQuery>(
     nodes: &[Node],
     items: &Items<P>,
     ray: &Ray,
+    q: &mut Q,
     stats: &mut S,
-) -> Option<Hit> {
-    binary_walk::<P, S, ANY>(nodes, items, ray, stats)
+) {
+    binary_walk(nodes, items, ray, q, stats);
 }
 
 /// [`binary`]'s closest hit written into `out`, the caller's slot, rather than copied there
@@ -45,25 +52,22 @@ pub(crate) fn binary_into<P: Primitive, S: Stats>(
     stats: &mut S,
     out: &mut Option<Hit>,
 ) {
-    *out = binary_walk::<P, S, false>(nodes, items, ray, stats);
+    let mut q = ClosestHit::new(ray);
+    binary_walk(nodes, items, ray, &mut q, stats);
+    *out = q.hit();
 }
 
 /// The body of [`binary`] and [`binary_into`].
 #[inline(always)]
-fn binary_walk<P: Primitive, S: Stats, const ANY: bool>(
+fn binary_walk<P: Primitive, S: Stats, Q: RayQuery>(
     nodes: &[Node],
     items: &Items<P>,
     ray: &Ray,
+    q: &mut Q,
     stats: &mut S,
-) -> Option<Hit> {
-    let mut best = Hit {
-        prim: u32::MAX,
-        t: ray.t_max,
-        u: 0.0,
-        v: 0.0,
-    };
-    if items.ids.is_empty() || nodes[0].bounds.intersect(ray, best.t).is_none() {
-        return None;
+) {
+    if items.ids.is_empty() || nodes[0].bounds.intersect(ray, q.t_far()).is_none() {
+        return;
     }
     let mut stack = Stack::<(u32, f32), MAX_DEPTH>::new();
     let mut current = 0usize;
@@ -73,7 +77,7 @@ fn binary_walk<P: Primitive, S: Stats, const ANY: bool>(
         trace::report(stats, || {
             let (t0, t1) = node
                 .bounds
-                .intersect(ray, best.t)
+                .intersect(ray, q.t_far())
                 .unwrap_or((f32::NAN, f32::NAN));
             let i = current as u32;
             Event::Enter {
@@ -92,37 +96,14 @@ fn binary_walk<P: Primitive, S: Stats, const ANY: bool>(
             // 8.76 -> 9.20 Mrays/s single-threaded (`cargo bench -p rt-benches --bench trace`).
             let range = node.prim_range();
             for (prim, &id) in items.prims[range.clone()].iter().zip(&items.ids[range]) {
-                stats.prim_test();
-                if ANY {
-                    let blocks = prim.occludes(ray, best.t);
-                    trace::blocked(stats, id, blocks);
-                    if blocks {
-                        return Some(Hit {
-                            prim: id,
-                            t: f32::NAN,
-                            u: 0.0,
-                            v: 0.0,
-                        });
-                    }
-                    continue;
-                }
-                let hit = prim.intersect(ray, best.t);
-                trace::tested(stats, id, hit.map(|h| h.t));
-                if let Some(h) = hit
-                    && Hit::beats(h.t, id, best.t, best.prim)
-                {
-                    best = Hit {
-                        prim: id,
-                        t: h.t,
-                        u: h.u,
-                        v: h.v,
-                    };
+                if leaf::offer_hit(prim, id, ray, q, stats).is_break() {
+                    return;
                 }
             }
         } else {
             let (a, b) = (current + 1, node.index as usize);
-            let ta = nodes[a].bounds.entry(ray, best.t);
-            let tb = nodes[b].bounds.entry(ray, best.t);
+            let ta = nodes[a].bounds.entry(ray, q.t_far());
+            let tb = nodes[b].bounds.entry(ray, q.t_far());
             let (near, t_near, far, t_far) = if ta <= tb {
                 (a, ta, b, tb)
             } else {
@@ -149,13 +130,13 @@ fn binary_walk<P: Primitive, S: Stats, const ANY: bool>(
             }
             trace::report(stats, || Event::Note("the ray enters neither child's box"));
         }
-        // Pop the next subtree that can still hold a hit no farther than the best so far.
+        // Pop the next subtree that can still hold a hit within the query's far end.
         loop {
             let Some((index, t_entry)) = stack.pop() else {
                 trace::report(stats, || Event::Note("stack empty: done"));
-                return (best.prim != u32::MAX).then_some(best);
+                return;
             };
-            let skipped = t_entry > best.t * SLAB_FAR_SCALE;
+            let skipped = t_entry > q.t_far() * SLAB_FAR_SCALE;
             trace::report(stats, || Event::Pop {
                 place: Place::Node(index),
                 t: t_entry,
@@ -177,16 +158,15 @@ pub(crate) const WIDE_STACK: usize = (WIDTH - 1) * MAX_DEPTH;
 /// one triangle at a time through the scalar test (the reference the kernels are tested
 /// against), or primitives of any type.
 pub(crate) trait Leaves {
-    /// Tests the leaf's items against the ray up to `best.t`, updating `best` by the tie rule.
-    /// With `ANY`, returns true at the first hit, with the blocking item's index in
-    /// `best.prim` (its `t`, `u`, `v` are then meaningless).
-    fn test<X: Simd, S: Stats, const ANY: bool>(
+    /// Tests the leaf's items against the ray up to `q.t_far()` and offers `q` the hits (for
+    /// an occlusion query, the first only). Returns true when the query ends the walk.
+    fn test<X: Simd, S: Stats, Q: RayQuery>(
         &self,
         simd: X,
         items: Range<usize>,
         r: &RayData<X>,
         ray: &Ray,
-        best: &mut Hit,
+        q: &mut Q,
         stats: &mut S,
     ) -> bool;
 
@@ -226,12 +206,17 @@ fn lane_by_lane<L: Leaves + ?Sized, X: Simd, S: Stats, const ANY: bool>(
         m &= m - 1;
         let ray = lanes.ray(i);
         let r = RayData::with_shear(simd, &ray, BoxRay::new(simd, &ray), lanes.shear(i));
-        let mut best = lanes.best(i);
-        if leaves.test::<X, S, ANY>(simd, items.clone(), &r, &ray, &mut best, stats) {
-            lanes.block(i, best.prim);
-            blocked |= 1 << i;
-        } else if !ANY {
-            lanes.offer_hit(i, best);
+        if ANY {
+            let mut q = AnyHit::new(&ray);
+            leaves.test(simd, items.clone(), &r, &ray, &mut q, stats);
+            if let Some(prim) = q.blocker() {
+                lanes.block(i, prim);
+                blocked |= 1 << i;
+            }
+        } else {
+            let mut q = ClosestHit::resume(lanes.best(i));
+            leaves.test(simd, items.clone(), &r, &ray, &mut q, stats);
+            lanes.offer_hit(i, q.record());
         }
     }
     blocked
@@ -244,13 +229,13 @@ pub(crate) struct Packs<'a, const MT: bool> {
 
 impl<const MT: bool> Leaves for Packs<'_, MT> {
     #[inline(always)]
-    fn test<X: Simd, S: Stats, const ANY: bool>(
+    fn test<X: Simd, S: Stats, Q: RayQuery>(
         &self,
         simd: X,
         items: Range<usize>,
         r: &RayData<X>,
         _: &Ray,
-        best: &mut Hit,
+        q: &mut Q,
         stats: &mut S,
     ) -> bool {
         for pack in &self.packs[items] {
@@ -258,23 +243,23 @@ impl<const MT: bool> Leaves for Packs<'_, MT> {
                 stats.prim_test();
             }
             let h = if MT {
-                kernels::moller_trumbore4(simd, pack, r, best.t)
+                kernels::moller_trumbore4(simd, pack, r, q.t_far())
             } else {
-                kernels::watertight4(simd, pack, r, best.t)
+                kernels::watertight4(simd, pack, r, q.t_far())
             };
             if S::TRACE {
                 let t = simd.store4(h.t);
                 for (lane, &id) in pack.ids[..pack.len()].iter().enumerate() {
                     let hit = (h.mask & 1 << lane != 0).then_some(t[lane]);
-                    if ANY {
+                    if Q::OCCLUSION {
                         trace::blocked(stats, id, hit.is_some());
                     } else {
                         trace::tested(stats, id, hit);
                     }
                 }
             }
-            if ANY && h.mask != 0 {
-                best.prim = pack.ids[h.mask.trailing_zeros() as usize];
+            if Q::OCCLUSION && h.mask != 0 {
+                let _ = q.offer(pack.ids[h.mask.trailing_zeros() as usize], BLOCKS);
                 return true;
             }
             let mut mask = h.mask;
@@ -283,7 +268,14 @@ impl<const MT: bool> Leaves for Packs<'_, MT> {
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
-                    consider(best, pack.ids[lane], t[lane], u[lane], v[lane]);
+                    let hit = PrimHit {
+                        t: t[lane],
+                        u: u[lane],
+                        v: v[lane],
+                    };
+                    if q.offer(pack.ids[lane], hit).is_break() {
+                        return true;
+                    }
                 }
             }
         }
@@ -350,37 +342,37 @@ pub(crate) struct ScalarPacks<'a> {
 }
 
 impl Leaves for ScalarPacks<'_> {
-    fn test<X: Simd, S: Stats, const ANY: bool>(
+    fn test<X: Simd, S: Stats, Q: RayQuery>(
         &self,
         _: X,
         items: Range<usize>,
         r: &RayData<X>,
         ray: &Ray,
-        best: &mut Hit,
+        q: &mut Q,
         stats: &mut S,
     ) -> bool {
         for pack in &self.packs[items] {
             for lane in 0..pack.len() {
                 stats.prim_test();
                 let row = |k: usize| pack.row(k, lane);
+                let t_far = q.t_far();
                 let hit = match self.test {
                     TriangleTest::Watertight => Triangle::new(row(0), row(1), row(2))
-                        .intersect_sheared(&r.shear, ray, best.t),
+                        .intersect_sheared(&r.shear, ray, t_far),
                     TriangleTest::MollerTrumbore => {
-                        rt_core::moller_trumbore_edges(row(0), row(1), row(2), ray, best.t)
+                        rt_core::moller_trumbore_edges(row(0), row(1), row(2), ray, t_far)
                     }
                 };
-                if ANY {
+                if Q::OCCLUSION {
                     trace::blocked(stats, pack.ids[lane], hit.is_some());
                 } else {
                     trace::tested(stats, pack.ids[lane], hit.map(|p| p.t));
                 }
                 if let Some(p) = hit {
-                    if ANY {
-                        best.prim = pack.ids[lane];
+                    let p = if Q::OCCLUSION { BLOCKS } else { p };
+                    if q.offer(pack.ids[lane], p).is_break() || Q::OCCLUSION {
                         return true;
                     }
-                    consider(best, pack.ids[lane], p.t, p.u, p.v);
                 }
             }
         }
@@ -396,33 +388,17 @@ pub(crate) struct Prims<'a, P> {
 
 impl<P: Primitive> Leaves for Prims<'_, P> {
     #[inline(always)]
-    fn test<X: Simd, S: Stats, const ANY: bool>(
+    fn test<X: Simd, S: Stats, Q: RayQuery>(
         &self,
         _: X,
         items: Range<usize>,
         _: &RayData<X>,
         ray: &Ray,
-        best: &mut Hit,
+        q: &mut Q,
         stats: &mut S,
     ) -> bool {
-        for (prim, &id) in self.prims[items.clone()].iter().zip(&self.ids[items]) {
-            stats.prim_test();
-            if ANY {
-                let blocks = prim.occludes(ray, best.t);
-                trace::blocked(stats, id, blocks);
-                if blocks {
-                    best.prim = id;
-                    return true;
-                }
-            } else {
-                let hit = prim.intersect(ray, best.t);
-                trace::tested(stats, id, hit.map(|h| h.t));
-                if let Some(h) = hit {
-                    consider(best, id, h.t, h.u, h.v);
-                }
-            }
-        }
-        false
+        let mut items = self.prims[items.clone()].iter().zip(&self.ids[items]);
+        items.any(|(prim, &id)| leaf::offer_hit(prim, id, ray, q, stats) == ControlFlow::Break(()))
     }
 }
 
@@ -435,15 +411,7 @@ fn place(c: ChildRef) -> Place {
     }
 }
 
-/// Keeps the hit `(id, t, u, v)` if it beats `best` by the tie rule.
-#[inline(always)]
-fn consider(best: &mut Hit, id: u32, t: f32, u: f32, v: f32) {
-    if Hit::beats(t, id, best.t, best.prim) {
-        *best = Hit { prim: id, t, u, v };
-    }
-}
-
-/// The wide traversal core, shared by closest hit (`ANY = false`) and any hit (`ANY = true`).
+/// The wide traversal core, shared by every ray query.
 /// `sort = false` skips sorting the children a closest-hit ray enters (a switch to measure what
 /// the sorting gains; see [`Ablation::sort_children`](crate::Ablation::sort_children)). It is a
 /// value rather than a type parameter: as one, it compiled a second copy of every closest-hit
@@ -452,24 +420,27 @@ fn consider(best: &mut Hit, id: u32, t: f32, u: f32, v: f32) {
 ///
 /// Each visit tests all children of a node with one slab test. Closest hit: the children
 /// entered are sorted by entry distance; the nearest is visited next and the others pushed with
-/// their distances, farthest first, and skipped when popped if a hit closer than their entry
-/// (allowing [`SLAB_FAR_SCALE`], as the box test does) has been found meanwhile. Any hit: no
-/// sorting (measured slower: it found hits no sooner); the children are pushed in lane order, and
-/// the first hit ends the walk. Leaves are tested when popped, like nodes.
+/// their distances, farthest first, and skipped when popped if they start beyond the query's
+/// far end (allowing [`SLAB_FAR_SCALE`], as the box test does), which for a closest hit is the
+/// best hit found meanwhile. Every query but occlusion walks this way. Occlusion
+/// ([`RayQuery::OCCLUSION`]): no sorting (measured slower: it found hits no sooner); the
+/// children are pushed in lane order, and the first hit ends the walk. Leaves are tested when
+/// popped, like nodes.
 #[inline(always)]
-pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
+pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, Q: RayQuery>(
     simd: X,
     nodes: &[WideNode],
     leaves: &L,
     ray: &Ray,
     sort: bool,
+    q: &mut Q,
     stats: &mut S,
-) -> Option<Hit> {
+) {
     // PERF: the root is tested before the triangle tests' part of the ray is set up, which a
     // ray that misses every child never needs: single-threaded, interleaved runs of both builds,
     // bunny primary rays 1.04x and incoherent 1.03x as fast, shadow rays unchanged.
     let boxes = BoxRay::new(simd, ray);
-    if kernels::slab8(simd, &nodes[0], &boxes, ray.t_max).0 == 0 {
+    if kernels::slab8(simd, &nodes[0], &boxes, q.t_far()).0 == 0 {
         stats.node_visit();
         trace::report(stats, || Event::Enter {
             place: Place::Node(0),
@@ -480,15 +451,9 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
         trace::report(stats, || {
             Event::Note("the ray misses every child box of the root")
         });
-        return None;
+        return;
     }
     let r = RayData::new(simd, ray, boxes);
-    let mut best = Hit {
-        prim: u32::MAX,
-        t: ray.t_max,
-        u: 0.0,
-        v: 0.0,
-    };
     let mut stack = Stack::<(u32, f32), WIDE_STACK>::new();
     let mut current = ChildRef::node(0);
     // Only the trace reads the entry distance of the node being visited.
@@ -503,7 +468,7 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
         });
         if !current.is_leaf() {
             let node = &nodes[current.index()];
-            let (mask, t_entry) = kernels::slab8(simd, node, &r.boxes, best.t);
+            let (mask, t_entry) = kernels::slab8(simd, node, &r.boxes, q.t_far());
             let t_children = if S::TRACE {
                 simd.store8(t_entry)
             } else {
@@ -519,7 +484,7 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
                 }
             }
             if mask != 0 {
-                if ANY {
+                if Q::OCCLUSION {
                     let mut m = mask;
                     while m != 0 {
                         let i = m.trailing_zeros() as usize;
@@ -576,16 +541,16 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
                     continue;
                 }
             }
-        } else if leaves.test::<X, S, ANY>(simd, current.items(), &r, ray, &mut best, stats) {
-            return Some(best);
+        } else if leaves.test(simd, current.items(), &r, ray, q, stats) {
+            return;
         }
-        // Pop the next subtree that can still hold a hit no farther than the best so far.
+        // Pop the next subtree that can still hold a hit within the query's far end.
         loop {
             let Some((child, t)) = stack.pop() else {
                 trace::report(stats, || Event::Note("stack empty: done"));
-                return (!ANY && best.prim != u32::MAX).then_some(best);
+                return;
             };
-            let skipped = !ANY && t > best.t * SLAB_FAR_SCALE;
+            let skipped = !Q::OCCLUSION && t > q.t_far() * SLAB_FAR_SCALE;
             trace::report(stats, || Event::Pop {
                 place: place(ChildRef(child)),
                 t,

@@ -1,8 +1,8 @@
 //! The trait every acceleration structure implements.
 
 use crate::{
-    Aabb, BallQuery, BoxQuery, ClosestPointQuery, Geometry, NoStats, OverlapQuery, PointHit,
-    Primitive, Ray, Stats,
+    Aabb, AllHits, AnyHit, BallQuery, BoxQuery, ClosestHit, ClosestPointQuery, CountHits, Filtered,
+    Geometry, NoStats, OverlapQuery, PointHit, PrimHit, Primitive, Ray, RayQuery, Stats,
 };
 use glam::Vec3;
 use std::fmt::Debug;
@@ -112,6 +112,10 @@ pub struct Region {
 ///   smallest primitive index ([`Hit::beats`]);
 /// - [`occluded`](Accel::occluded) is true exactly when `intersect` would return a hit, and may
 ///   stop at the first one it finds;
+/// - [`ray_query`](Accel::ray_query) offers a [`RayQuery`] every hit in the ray's interval
+///   that the [`query`](crate::query) module's contract names, which makes
+///   [`intersect_filtered`](Accel::intersect_filtered), [`all_hits`](Accel::all_hits) and
+///   [`count_hits`](Accel::count_hits) exactly brute force's;
 /// - [`closest_point`](Accel::closest_point) returns exactly what `BruteForce` returns: the
 ///   primitive nearest to the point within the maximum distance, ties broken by the smallest
 ///   index ([`PointHit::beats`]), which follows from [`ball_query`](Accel::ball_query) offering
@@ -163,11 +167,41 @@ pub trait Accel: Sized + Send + Sync {
         Self::build(&geometry.to_vec(), params)
     }
 
-    /// The closest hit, reporting traversal events to `stats`.
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit>;
+    /// Offers `query` every valid primitive the ray hits in `[ray.t_min, query.t_far()]`: the one
+    /// ray traversal behind closest hits, any hits, filters, all hits and counts, reporting
+    /// events to `stats`. The [`query`](crate::query) module states the contract (each hit once
+    /// unless the query is [repeatable](RayQuery::REPEATABLE), until an offer returns `Break`)
+    /// and shows a query of one's own.
+    ///
+    /// The default runs [`box_query`](Accel::box_query) with the box around the part of the ray
+    /// inside [`bounds`](Accel::bounds) and tests each primitive offered against the ray: correct
+    /// for any structure whose box (or ball) query is, but it offers everything near that box.
+    /// Every structure of this workspace overrides it with its own walk. A structure whose box
+    /// query offers pre-processed triangles of a test other than the watertight one must
+    /// override it.
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        if let Some(mut q) = crate::query::RayOfBox::new(ray, query, &self.bounds()) {
+            self.box_query(&mut q, stats);
+        }
+    }
 
-    /// Whether anything is hit in the ray's interval, reporting events to `stats`.
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool;
+    /// The closest hit, reporting traversal events to `stats`: [`ray_query`](Accel::ray_query)
+    /// with [`ClosestHit`].
+    #[inline]
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        let mut query = ClosestHit::new(ray);
+        self.ray_query(ray, &mut query, stats);
+        query.hit()
+    }
+
+    /// Whether anything is hit in the ray's interval, reporting events to `stats`:
+    /// [`ray_query`](Accel::ray_query) with [`AnyHit`].
+    #[inline]
+    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+        let mut query = AnyHit::new(ray);
+        self.ray_query(ray, &mut query, stats);
+        query.occluded()
+    }
 
     /// The closest hit.
     #[inline]
@@ -179,6 +213,66 @@ pub trait Accel: Sized + Send + Sync {
     #[inline]
     fn occluded(&self, ray: &Ray) -> bool {
         self.occluded_with(ray, &mut NoStats)
+    }
+
+    /// The closest hit among those `filter` accepts: it sees each candidate's primitive and
+    /// hit (`t`, `u`, `v`) and answers whether it counts, so a hit it rejects lets the ray go on
+    /// (see [`Filtered`]: the filter must answer the same when asked again). A filter that
+    /// accepts everything compiles to the plain [`intersect`](Accel::intersect).
+    ///
+    /// ```
+    /// use rt_core::{Accel, BruteForce, Ray, Triangle, glam::Vec3};
+    /// let tri = |z| Triangle::new(Vec3::new(-1.0, -1.0, z), Vec3::new(1.0, -1.0, z), Vec3::new(0.0, 1.0, z));
+    /// let accel = BruteForce::build(&[tri(1.0), tri(2.0)], &());
+    /// // A secondary ray leaving primitive 0 must not hit it again.
+    /// let ray = Ray::new(Vec3::new(0.0, 0.0, 1.0), Vec3::Z);
+    /// let hit = accel.intersect_filtered(&ray, |prim, _| prim != 0).unwrap();
+    /// assert_eq!((hit.prim, hit.t), (1, 1.0));
+    /// ```
+    #[inline]
+    fn intersect_filtered<F: FnMut(u32, &PrimHit) -> bool>(
+        &self,
+        ray: &Ray,
+        filter: F,
+    ) -> Option<Hit> {
+        let mut query = Filtered::new(ClosestHit::new(ray), filter);
+        self.ray_query(ray, &mut query, &mut NoStats);
+        query.inner.hit()
+    }
+
+    /// Whether the ray hits anything `filter` accepts in its interval (for shadow rays through
+    /// alpha-masked leaves): the walk stops at the first accepted hit.
+    #[inline]
+    fn occluded_filtered<F: FnMut(u32, &PrimHit) -> bool>(&self, ray: &Ray, filter: F) -> bool {
+        let mut query = Filtered::new(AnyHit::new(ray), filter);
+        self.ray_query(ray, &mut query, &mut NoStats);
+        query.inner.occluded()
+    }
+
+    /// Every hit in the ray's interval, sorted by `t` (ties by primitive index), each
+    /// primitive once: see [`AllHits`].
+    ///
+    /// ```
+    /// use rt_core::{Accel, BruteForce, Ray, Triangle, glam::Vec3};
+    /// let tri = |z| Triangle::new(Vec3::new(-1.0, -1.0, z), Vec3::new(1.0, -1.0, z), Vec3::new(0.0, 1.0, z));
+    /// let accel = BruteForce::build(&[tri(3.0), tri(1.0), tri(2.0)], &());
+    /// let ray = Ray::new(Vec3::ZERO, Vec3::Z);
+    /// let prims: Vec<u32> = accel.all_hits(&ray).iter().map(|h| h.prim).collect();
+    /// assert_eq!(prims, [1, 2, 0]);
+    /// assert_eq!(accel.count_hits(&ray), 3);
+    /// ```
+    fn all_hits(&self, ray: &Ray) -> Vec<Hit> {
+        let mut query = AllHits::new(ray);
+        self.ray_query(ray, &mut query, &mut NoStats);
+        query.into_sorted()
+    }
+
+    /// How many primitives the ray hits in its interval: the length of
+    /// [`all_hits`](Accel::all_hits), counted without keeping the hits.
+    fn count_hits(&self, ray: &Ray) -> usize {
+        let mut query = CountHits::new(ray);
+        self.ray_query(ray, &mut query, &mut NoStats);
+        query.count
     }
 
     /// The closest hit of each ray of `rays`, into the same slot of `out`, reporting events to

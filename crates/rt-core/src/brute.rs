@@ -2,7 +2,9 @@
 
 use crate::bundle::{Group, bundles_ray, for_each_bundle, octant};
 use crate::lanes::Lanes;
-use crate::{Aabb, Accel, BallQuery, BoxQuery, BuildStats, Geometry, Hit, Primitive, Ray, Stats};
+use crate::{
+    Aabb, Accel, BallQuery, BoxQuery, BuildStats, Geometry, Hit, Primitive, Ray, RayQuery, Stats,
+};
 
 /// Tests every primitive for every ray and keeps the closest: the definition of the right answer.
 ///
@@ -34,11 +36,7 @@ impl<P: Primitive> BruteForce<P> {
         for_each_bundle(&sorted, |group| match group {
             Group::Single(k, ray) => {
                 stats.single_ray();
-                let hit = if ANY {
-                    self.occluded_with(ray, stats).then_some(BLOCKED)
-                } else {
-                    self.intersect_with(ray, stats)
-                };
+                let hit = crate::bundle::single::<_, S, ANY>(self, ray, stats);
                 answer(order[k] as usize, hit);
             }
             Group::Bundle(b) => {
@@ -56,7 +54,7 @@ impl<P: Primitive> BruteForce<P> {
                 }
                 for (i, &slot) in b.slot[..b.len()].iter().enumerate() {
                     let hit = if ANY {
-                        (live >> i & 1 == 0).then_some(BLOCKED)
+                        (live >> i & 1 == 0).then_some(crate::bundle::BLOCKED)
                     } else {
                         lanes.hit(i)
                     };
@@ -66,14 +64,6 @@ impl<P: Primitive> BruteForce<P> {
         });
     }
 }
-
-/// What [`BruteForce::bundles`] answers for a blocked ray (only `is_some` is read).
-const BLOCKED: Hit = Hit {
-    prim: u32::MAX,
-    t: f32::NAN,
-    u: 0.0,
-    v: 0.0,
-};
 
 impl<P: Primitive> Accel for BruteForce<P> {
     type Prim = P;
@@ -99,43 +89,17 @@ impl<P: Primitive> Accel for BruteForce<P> {
         Self { prims, ids, bounds }
     }
 
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+    /// Tests every valid primitive, in index order, until the query stops.
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
         // Outside the precondition (NaN, huge origins, ...): no answer is meaningful.
         if !ray.is_valid() {
-            return None;
+            return;
         }
-        let mut best: Option<Hit> = None;
-        let mut t_max = ray.t_max;
         for (p, &id) in self.prims.iter().zip(&self.ids) {
-            stats.prim_test();
-            let hit = p.intersect(ray, t_max);
-            crate::trace::tested(stats, id, hit.map(|h| h.t));
-            if let Some(h) = hit {
-                // Ids increase along the array, so an equal t never replaces an earlier hit.
-                if best.is_none_or(|b| h.t < b.t) {
-                    best = Some(Hit {
-                        prim: id,
-                        t: h.t,
-                        u: h.u,
-                        v: h.v,
-                    });
-                    t_max = h.t;
-                }
+            if crate::leaf::offer_hit(p, id, ray, query, stats).is_break() {
+                return;
             }
         }
-        best
-    }
-
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        if !ray.is_valid() {
-            return false;
-        }
-        self.prims.iter().zip(&self.ids).any(|(p, &id)| {
-            stats.prim_test();
-            let blocks = p.occludes(ray, ray.t_max);
-            crate::trace::blocked(stats, id, blocks);
-            blocks
-        })
     }
 
     /// Every primitive against a bundle's lanes at once ([`Lanes`], the watertight test over

@@ -759,6 +759,30 @@ pub enum Route {
     Miss,
 }
 
+/// What a single ray of a bundle query answers: [`Accel::intersect_with`](crate::Accel), or
+/// for `ANY` [`BLOCKED`] when [`Accel::occluded_with`](crate::Accel) is true: the `single`
+/// walk structures pass to [`walk_groups`].
+#[inline(always)]
+pub fn single<A: crate::Accel, S: Stats, const ANY: bool>(
+    accel: &A,
+    ray: &Ray,
+    stats: &mut S,
+) -> Option<Hit> {
+    if ANY {
+        accel.occluded_with(ray, stats).then_some(BLOCKED)
+    } else {
+        accel.intersect_with(ray, stats)
+    }
+}
+
+/// The answer of a bundle's any-hit lane that is blocked (only `is_some` is read).
+pub const BLOCKED: Hit = Hit {
+    prim: u32::MAX,
+    t: f32::NAN,
+    u: 0.0,
+    v: 0.0,
+};
+
 /// The frame of a structure's own bundle queries: the first `slots` rays split by
 /// [`for_each_bundle`]; each bundle of two or more lanes that `route` sends to
 /// [`Route::Walk`] walked by `walk` (which records hits in its [`Lanes`] and returns the lanes

@@ -1,8 +1,10 @@
 //! Any structure as a trait object: [`DynAccel`].
 
+use crate::query::{AllHits, AnyHit, ClosestHit, Filtered, RayOfBox, RayQuery};
 use crate::trace::Trace;
 use crate::{
-    Aabb, Accel, BallQuery, BoxQuery, BuildStats, Counters, Hit, NoStats, PointHit, Ray, Region,
+    Aabb, Accel, BallQuery, BoxQuery, BuildStats, Counters, Hit, NoStats, PointHit, PrimHit,
+    Primitive, Ray, Region,
 };
 use glam::Vec3;
 
@@ -51,6 +53,47 @@ pub trait DynAccel<P>: Send + Sync {
             self.ball_query_dyn(&mut ball, counters);
         }
     }
+    /// [`Accel::all_hits`], counted into `counters` if given. The default, for wrappers that
+    /// implement only the box (or ball) query, runs [`Accel::ray_query`]'s default through
+    /// [`box_query_dyn`](DynAccel::box_query_dyn).
+    fn all_hits_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> Vec<Hit>
+    where
+        P: Primitive,
+    {
+        let mut query = AllHits::new(ray);
+        by_boxes(self, ray, &mut query, counters);
+        query.into_sorted()
+    }
+    /// [`Accel::intersect_filtered`], counted into `counters` if given; the default as for
+    /// [`all_hits_dyn`](DynAccel::all_hits_dyn).
+    fn intersect_filtered_dyn(
+        &self,
+        ray: &Ray,
+        filter: &mut dyn FnMut(u32, &PrimHit) -> bool,
+        counters: Option<&mut Counters>,
+    ) -> Option<Hit>
+    where
+        P: Primitive,
+    {
+        let mut query = Filtered::new(ClosestHit::new(ray), filter);
+        by_boxes(self, ray, &mut query, counters);
+        query.inner.hit()
+    }
+    /// [`Accel::occluded_filtered`], counted into `counters` if given; the default as for
+    /// [`all_hits_dyn`](DynAccel::all_hits_dyn).
+    fn occluded_filtered_dyn(
+        &self,
+        ray: &Ray,
+        filter: &mut dyn FnMut(u32, &PrimHit) -> bool,
+        counters: Option<&mut Counters>,
+    ) -> bool
+    where
+        P: Primitive,
+    {
+        let mut query = Filtered::new(AnyHit::new(ray), filter);
+        by_boxes(self, ray, &mut query, counters);
+        query.inner.occluded()
+    }
     /// One closest-hit (`any == false`) or any-hit query with every step of its walk recorded
     /// ([`Trace`]); an any-hit answer is `Some` with primitive `u32::MAX` when occluded.
     fn trace_dyn(&self, ray: &Ray, any: bool) -> (Option<Hit>, Trace);
@@ -96,6 +139,32 @@ pub trait DynAccel<P>: Send + Sync {
         out: &mut [Option<PointHit>],
         counters: Option<&mut Counters>,
     );
+}
+
+/// A ray query through a structure's box query: [`Accel::ray_query`]'s default, for a
+/// structure known only as a trait object.
+fn by_boxes<P: Primitive, D: DynAccel<P> + ?Sized, Q: RayQuery>(
+    s: &D,
+    ray: &Ray,
+    query: &mut Q,
+    counters: Option<&mut Counters>,
+) {
+    if let Some(mut q) = RayOfBox::new(ray, query, &s.bounds_dyn()) {
+        s.box_query_dyn(&mut q, counters);
+    }
+}
+
+/// [`Accel::ray_query`] counted into `counters` if given.
+fn ray_query_counted<A: Accel, Q: RayQuery>(
+    a: &A,
+    ray: &Ray,
+    query: &mut Q,
+    counters: Option<&mut Counters>,
+) {
+    match counters {
+        Some(c) => a.ray_query(ray, query, c),
+        None => a.ray_query(ray, query, &mut NoStats),
+    }
 }
 
 impl<A: Accel> DynAccel<A::Prim> for A {
@@ -157,6 +226,34 @@ impl<A: Accel> DynAccel<A::Prim> for A {
             Some(c) => self.box_query(&mut query, c),
             None => self.box_query(&mut query, &mut NoStats),
         }
+    }
+
+    fn all_hits_dyn(&self, ray: &Ray, counters: Option<&mut Counters>) -> Vec<Hit> {
+        let mut query = AllHits::new(ray);
+        ray_query_counted(self, ray, &mut query, counters);
+        query.into_sorted()
+    }
+
+    fn intersect_filtered_dyn(
+        &self,
+        ray: &Ray,
+        filter: &mut dyn FnMut(u32, &PrimHit) -> bool,
+        counters: Option<&mut Counters>,
+    ) -> Option<Hit> {
+        let mut query = Filtered::new(ClosestHit::new(ray), filter);
+        ray_query_counted(self, ray, &mut query, counters);
+        query.inner.hit()
+    }
+
+    fn occluded_filtered_dyn(
+        &self,
+        ray: &Ray,
+        filter: &mut dyn FnMut(u32, &PrimHit) -> bool,
+        counters: Option<&mut Counters>,
+    ) -> bool {
+        let mut query = Filtered::new(AnyHit::new(ray), filter);
+        ray_query_counted(self, ray, &mut query, counters);
+        query.inner.occluded()
     }
 
     fn trace_dyn(&self, ray: &Ray, any: bool) -> (Option<Hit>, Trace) {

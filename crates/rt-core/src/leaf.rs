@@ -2,11 +2,12 @@
 //! offer them to a box query.
 //!
 //! Structures that reference a primitive from several cells (kd-trees, grids, octrees) share
-//! this loop, with a per-ray [`Mailbox`] to test each primitive once; the BVH, whose leaves own
-//! their primitives, needs no mailbox.
+//! this loop, with a per-ray record of what was tested ([`Seen`]) to test each primitive once;
+//! the BVH, whose leaves own their primitives, needs none.
 
+use crate::query::BLOCKS;
 use crate::trace::{self, Event};
-use crate::{BoxQuery, Hit, Mailbox, Primitive, Ray, Stats, Visited};
+use crate::{BoxQuery, Hit, Mailbox, Primitive, Ray, RayQuery, Stats, Visited};
 use std::ops::ControlFlow;
 
 /// The "no hit yet" record of a ray whose interval ends at `t_max`.
@@ -20,51 +21,80 @@ pub fn no_hit(t_max: f32) -> Hit {
     }
 }
 
-/// Tests the primitives `ids` (indices into `prims`) against `[ray.t_min, best.t]`, keeping
-/// the closest hit in `best` (ties to the smaller index). With `ANY`, returns true at the first
-/// hit instead (its index in `best.prim`). With `use_mailbox`, primitives among the last `N`
-/// this ray tested are skipped and reported to `stats` as mailbox skips.
+/// How a walk remembers the primitives it has tested, so that a primitive listed in several
+/// cells is tested once: a [`Mailbox`] of the last few (enough for closest and any hits, which
+/// a second test cannot change), or [`Visited`], every one (for queries that must see each hit
+/// once, [`RayQuery::REPEATABLE`] being false).
+pub trait Seen {
+    /// True the first time `id` is seen (test it), false after (skip it).
+    fn first_visit(&mut self, id: u32) -> bool;
+}
+
+impl<const N: usize> Seen for Mailbox<N> {
+    #[inline(always)]
+    fn first_visit(&mut self, id: u32) -> bool {
+        !self.check_and_insert(id)
+    }
+}
+
+impl Seen for Visited {
+    #[inline(always)]
+    fn first_visit(&mut self, id: u32) -> bool {
+        Visited::first_visit(self, id)
+    }
+}
+
+/// Tests the primitives `ids` (indices into `prims`) against `[ray.t_min, query.t_far()]` and
+/// offers `query` each hit ([`offer_hit`]); `Break` when the query ends the walk. With
+/// `dedupe`, primitives `seen` before are skipped and reported to `stats` as mailbox skips.
 #[inline(always)]
-pub fn test_primitives<P: Primitive, S: Stats, const ANY: bool, const N: usize>(
+pub fn test_primitives<P: Primitive, S: Stats, Q: RayQuery, M: Seen>(
     prims: &[P],
     ids: &[u32],
     ray: &Ray,
-    best: &mut Hit,
-    mailbox: &mut Mailbox<N>,
-    use_mailbox: bool,
+    query: &mut Q,
+    seen: &mut M,
+    dedupe: bool,
     stats: &mut S,
-) -> bool {
+) -> ControlFlow<()> {
     for &id in ids {
-        if use_mailbox && mailbox.check_and_insert(id) {
+        if dedupe && !seen.first_visit(id) {
             stats.mailbox_skip();
             trace::report(stats, || Event::Skip { prim: id });
             continue;
         }
-        stats.prim_test();
-        let prim = &prims[id as usize];
-        if ANY {
-            let blocks = prim.occludes(ray, best.t);
-            trace::blocked(stats, id, blocks);
-            if blocks {
-                best.prim = id;
-                return true;
-            }
-            continue;
-        }
-        let hit = prim.intersect(ray, best.t);
-        trace::tested(stats, id, hit.map(|h| h.t));
-        if let Some(h) = hit
-            && Hit::beats(h.t, id, best.t, best.prim)
-        {
-            *best = Hit {
-                prim: id,
-                t: h.t,
-                u: h.u,
-                v: h.v,
-            };
-        }
+        offer_hit(&prims[id as usize], id, ray, query, stats)?;
     }
-    false
+    ControlFlow::Continue(())
+}
+
+/// Tests primitive `id` against `[ray.t_min, query.t_far()]`, counting the test, and offers
+/// `query` its hit; `Break` when the query ends the walk, which an
+/// [occlusion](RayQuery::OCCLUSION) query does at its first hit (offered as [`BLOCKS`]).
+#[inline(always)]
+pub fn offer_hit<P: Primitive, S: Stats, Q: RayQuery>(
+    prim: &P,
+    id: u32,
+    ray: &Ray,
+    query: &mut Q,
+    stats: &mut S,
+) -> ControlFlow<()> {
+    stats.prim_test();
+    if Q::OCCLUSION {
+        let blocks = prim.occludes(ray, query.t_far());
+        trace::blocked(stats, id, blocks);
+        if blocks {
+            let _ = query.offer(id, BLOCKS);
+            return ControlFlow::Break(());
+        }
+        return ControlFlow::Continue(());
+    }
+    let hit = prim.intersect(ray, query.t_far());
+    trace::tested(stats, id, hit.map(|h| h.t));
+    match hit {
+        Some(h) => query.offer(id, h),
+        None => ControlFlow::Continue(()),
+    }
 }
 
 /// The answer a walk that kept `best` (starting from [`no_hit`]) returns: `None` if nothing was

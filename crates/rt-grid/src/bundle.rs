@@ -91,7 +91,7 @@ impl<P: Primitive> Grid<P> {
             rays,
             slots,
             stats,
-            |ray, stats| self.walk::<S, ANY>(ray, stats),
+            |ray, stats| rt_core::bundle::single::<_, S, ANY>(self, ray, stats),
             |b| {
                 b.route(&self.shape.bounds(), |b| {
                     !self.refs.is_empty() && coherent(&self.shape, b)

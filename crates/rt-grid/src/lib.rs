@@ -103,7 +103,7 @@ pub use builder::cells_overlapping;
 pub use cell::{GridShape, MAX_RESOLUTION};
 pub use rt_core::ValidationError;
 
-use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, Stats};
+use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, RayQuery, Stats};
 
 /// Build and traversal parameters. `Default` is [`GridParams::standard`].
 #[derive(Clone, Debug, PartialEq)]
@@ -230,13 +230,8 @@ impl<P: Primitive> Accel for Grid<P> {
     }
 
     #[inline]
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        self.walk::<S, false>(ray, stats)
-    }
-
-    #[inline]
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.walk::<S, true>(ray, stats).is_some()
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        self.query(ray, query, stats);
     }
 
     /// Coherent grid traversal, slice by slice (`bundle.rs`).

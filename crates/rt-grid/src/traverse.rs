@@ -1,6 +1,7 @@
 //! The uniform grid's walk: [`Dda`] through the cells, testing each cell's primitives.
 //!
-//! The walk keeps the best hit found so far and stops once the next cell starts beyond it: a
+//! The walk offers its query each hit and stops once the next cell starts beyond the query's
+//! far end (for a closest hit, the best hit so far): a
 //! primitive spanning several cells may be hit beyond the current cell while a closer one waits
 //! in the next. Where two boundaries are crossed within rounding of each other (the ray passes
 //! next to a cell edge or corner), the cells beside the path are tested too, as the kd-tree
@@ -8,50 +9,63 @@
 
 use crate::Grid;
 use crate::dda::{Dda, RayAxes};
+use rt_core::leaf::{self, Seen};
 use rt_core::trace::{self, Event, Place};
-use rt_core::{Hit, Mailbox, Primitive, Ray, SLAB_FAR_SCALE, Stats, leaf};
+use rt_core::{Mailbox, Primitive, Ray, RayQuery, SLAB_FAR_SCALE, Stats, Visited};
+use std::ops::ControlFlow;
 
 /// Mailbox slots per ray: the last this many primitives tested are not tested again.
 pub(crate) const MAILBOX: usize = 8;
 
 impl<P: Primitive> Grid<P> {
-    /// Tests the primitives of cell `c` against `[ray.t_min, best.t]`. Returns true if `ANY` and
-    /// one hit.
+    /// Tests the primitives of cell `c` against `[ray.t_min, q.t_far()]`, offering `q` the
+    /// hits; `Break` when the query ends the walk.
     #[inline(always)]
-    fn test_cell<S: Stats, const ANY: bool>(
+    fn test_cell<S: Stats, Q: RayQuery, M: Seen>(
         &self,
         c: [u32; 3],
         ray: &Ray,
-        best: &mut Hit,
-        mailbox: &mut Mailbox<MAILBOX>,
+        q: &mut Q,
+        seen: &mut M,
         stats: &mut S,
-    ) -> bool {
+    ) -> ControlFlow<()> {
         let i = self.shape.index(c);
         let ids = &self.refs[self.cells[i] as usize..self.cells[i + 1] as usize];
-        leaf::test_primitives::<P, S, ANY, MAILBOX>(
-            &self.prims,
-            ids,
-            ray,
-            best,
-            mailbox,
-            self.mailbox,
-            stats,
-        )
+        // A query that wants each hit once is remembered exactly, whatever the ablation says.
+        let dedupe = self.mailbox || !Q::REPEATABLE;
+        leaf::test_primitives(&self.prims, ids, ray, q, seen, dedupe, stats)
     }
 
-    /// The DDA walk. `ANY = false` finds the closest hit; `ANY = true` returns at the first.
+    /// The walk for query `q`: with a mailbox for a repeatable query, else remembering every
+    /// primitive tested ([`Seen`]).
     #[inline(always)]
-    pub(crate) fn walk<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+    pub(crate) fn query<S: Stats, Q: RayQuery>(&self, ray: &Ray, q: &mut Q, stats: &mut S) {
+        if Q::REPEATABLE {
+            self.walk(ray, q, &mut Mailbox::<MAILBOX>::new(), stats);
+        } else {
+            Visited::with(self.prims.len(), |seen| self.walk(ray, q, seen, stats));
+        }
+    }
+
+    /// The DDA walk.
+    #[inline(always)]
+    fn walk<S: Stats, Q: RayQuery, M: Seen>(
+        &self,
+        ray: &Ray,
+        q: &mut Q,
+        seen: &mut M,
+        stats: &mut S,
+    ) {
         // Outside the precondition (NaN, huge origins, ...): answer at once, walk nothing.
         if self.refs.is_empty() || !ray.is_valid() {
-            return None;
+            return;
         }
         let shape = &self.shape;
-        let (t0, t1) = shape.bounds().intersect(ray, ray.t_max)?;
+        let Some((t0, t1)) = shape.bounds().intersect(ray, q.t_far()) else {
+            return;
+        };
         let r = RayAxes::new(ray);
         let mut dda = Dda::start(shape, &r, t0);
-        let mut best = leaf::no_hit(ray.t_max);
-        let mut mailbox = Mailbox::new();
         // Only the trace reads where the ray enters the current cell.
         let mut t_enter = t0;
         let enter = |cell: [u32; 3], t0: f32, t1: f32| Event::Enter {
@@ -63,12 +77,12 @@ impl<P: Primitive> Grid<P> {
         loop {
             stats.node_visit();
             trace::report(stats, || enter(dda.cell, t_enter, dda.exit().1.min(t1)));
-            if self.test_cell::<S, ANY>(dda.cell, ray, &mut best, &mut mailbox, stats) {
-                trace::report(stats, || Event::Note("a primitive blocks the ray: done"));
+            if self.test_cell(dda.cell, ray, q, seen, stats).is_break() {
+                trace::report(stats, || Event::Note("the query ends the walk: done"));
                 break;
             }
             let (a, t_exit) = dda.exit();
-            if t_exit > best.t * SLAB_FAR_SCALE || t_exit > t1 {
+            if t_exit > q.t_far() * SLAB_FAR_SCALE || t_exit > t1 {
                 trace::report(stats, || {
                     Event::Note(if t_exit > t1 {
                         "the ray leaves the grid: done"
@@ -84,8 +98,8 @@ impl<P: Primitive> Grid<P> {
                     Event::Note("two planes crossed within rounding: the cell beside the path too")
                 });
                 trace::report(stats, || enter(c, t_exit, t_exit));
-                if self.test_cell::<S, ANY>(c, ray, &mut best, &mut mailbox, stats) {
-                    return leaf::answer::<ANY>(best);
+                if self.test_cell(c, ray, q, seen, stats).is_break() {
+                    return;
                 }
             }
             if !dda.step(shape, &r, a) {
@@ -94,6 +108,5 @@ impl<P: Primitive> Grid<P> {
             }
             t_enter = t_exit;
         }
-        leaf::answer::<ANY>(best)
     }
 }

@@ -30,7 +30,7 @@ impl<P: Primitive> HGrid<P> {
             rays,
             slots,
             stats,
-            |ray, stats| self.walk::<S, ANY>(ray, stats),
+            |ray, stats| rt_core::bundle::single::<_, S, ANY>(self, ray, stats),
             |b| b.route(&top.bounds(), |b| !self.refs.is_empty() && coherent(top, b)),
             // Inlined, so that the walk is compiled with the vector instructions `walk_groups` runs
             // with (`Isa::run`).

@@ -90,7 +90,7 @@ pub use builder::MAX_LEVELS;
 pub use node::{Cell, Level};
 pub use rt_core::ValidationError;
 
-use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, Stats};
+use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, RayQuery, Stats};
 
 /// Build and traversal parameters. `Default` is [`HGridParams::standard`].
 #[derive(Clone, Debug, PartialEq)]
@@ -214,13 +214,8 @@ impl<P: Primitive> Accel for HGrid<P> {
     }
 
     #[inline]
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        self.walk::<S, false>(ray, stats)
-    }
-
-    #[inline]
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.walk::<S, true>(ray, stats).is_some()
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        self.query(ray, query, stats);
     }
 
     /// Coherent grid traversal, level by level (`bundle.rs`).

@@ -4,14 +4,16 @@
 //! The walks in progress sit on a fixed stack, one per level. A cell is visited once (a leaf's
 //! primitives tested, or its nested grid entered at the ray's entry into the cell); a walk that
 //! leaves its grid pops, and the walk below steps on. Everything else is the uniform grid's:
-//! the best hit is kept across cells and the walk ends at the first cell starting beyond it, and
+//! hits are offered to the query across cells and the walk ends at the first cell starting beyond
+//! the query's far end (for a closest hit, the best hit so far), and
 //! where two boundaries are crossed within rounding of each other the cells beside the path are
 //! tested too (a parent cell there by its whole list of primitives).
 
 use crate::HGrid;
 use crate::builder::MAX_LEVELS;
+use rt_core::leaf::{self, Seen};
 use rt_core::trace::{self, Event, Place};
-use rt_core::{Hit, Mailbox, Primitive, Ray, SLAB_FAR_SCALE, Stats, leaf};
+use rt_core::{Mailbox, Primitive, Ray, RayQuery, SLAB_FAR_SCALE, Stats, Visited};
 use rt_grid::dda::{Dda, RayAxes};
 
 /// Mailbox slots per ray.
@@ -29,15 +31,34 @@ struct Walk {
 }
 
 impl<P: Primitive> HGrid<P> {
-    /// The nested walk. `ANY = false` finds the closest hit; `ANY = true` returns at the first.
+    /// The walk for query `q`: with a mailbox for a repeatable query, else remembering every
+    /// primitive tested ([`Seen`]).
     #[inline(always)]
-    pub(crate) fn walk<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+    pub(crate) fn query<S: Stats, Q: RayQuery>(&self, ray: &Ray, q: &mut Q, stats: &mut S) {
+        if Q::REPEATABLE {
+            self.walk(ray, q, &mut Mailbox::<MAILBOX>::new(), stats);
+        } else {
+            Visited::with(self.prims.len(), |seen| self.walk(ray, q, seen, stats));
+        }
+    }
+
+    /// The nested walk.
+    #[inline(always)]
+    fn walk<S: Stats, Q: RayQuery, M: Seen>(
+        &self,
+        ray: &Ray,
+        q: &mut Q,
+        seen: &mut M,
+        stats: &mut S,
+    ) {
         // Outside the precondition (NaN, huge origins, ...): answer at once, walk nothing.
         if self.refs.is_empty() || !ray.is_valid() {
-            return None;
+            return;
         }
         let top = &self.levels[0];
-        let (t0, t1) = top.shape.bounds().intersect(ray, ray.t_max)?;
+        let Some((t0, t1)) = top.shape.bounds().intersect(ray, q.t_far()) else {
+            return;
+        };
         let r = RayAxes::new(ray);
         let start = Walk {
             level: 0,
@@ -47,18 +68,10 @@ impl<P: Primitive> HGrid<P> {
         };
         let mut stack = [start; MAX_LEVELS];
         let mut sp = 1;
-        let mut best = leaf::no_hit(ray.t_max);
-        let mut mailbox = Mailbox::<MAILBOX>::new();
-        let mut test = |ids: &[u32], best: &mut Hit, stats: &mut S| {
-            leaf::test_primitives::<P, S, ANY, MAILBOX>(
-                &self.prims,
-                ids,
-                ray,
-                best,
-                &mut mailbox,
-                self.mailbox,
-                stats,
-            )
+        // A query that wants each hit once is remembered exactly, whatever the ablation says.
+        let dedupe = self.mailbox || !Q::REPEATABLE;
+        let mut test = |ids: &[u32], q: &mut Q, stats: &mut S| {
+            leaf::test_primitives(&self.prims, ids, ray, q, seen, dedupe, stats).is_break()
         };
         loop {
             let w = stack[sp - 1];
@@ -91,13 +104,13 @@ impl<P: Primitive> HGrid<P> {
                     sp += 1;
                     continue;
                 }
-                if test(&self.refs[cell.references()], &mut best, stats) {
-                    trace::report(stats, || Event::Note("a primitive blocks the ray: done"));
+                if test(&self.refs[cell.references()], q, stats) {
+                    trace::report(stats, || Event::Note("the query ends the walk: done"));
                     break;
                 }
             }
             let (a, t_exit) = w.dda.exit();
-            if t_exit > best.t * SLAB_FAR_SCALE || t_exit > t1 {
+            if t_exit > q.t_far() * SLAB_FAR_SCALE || t_exit > t1 {
                 trace::report(stats, || {
                     Event::Note(if t_exit > t1 {
                         "the ray leaves the top grid: done"
@@ -121,8 +134,8 @@ impl<P: Primitive> HGrid<P> {
                     }
                     None => &self.refs[cell.references()],
                 };
-                if test(ids, &mut best, stats) {
-                    return leaf::answer::<ANY>(best);
+                if test(ids, q, stats) {
+                    return;
                 }
             }
             let w = &mut stack[sp - 1];
@@ -143,6 +156,5 @@ impl<P: Primitive> HGrid<P> {
                 }
             }
         }
-        leaf::answer::<ANY>(best)
     }
 }

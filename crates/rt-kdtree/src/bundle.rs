@@ -60,7 +60,7 @@ impl<P: Primitive> KdTree<P> {
             rays,
             slots,
             stats,
-            |ray, stats| self.single::<S, ANY>(ray, stats),
+            |ray, stats| rt_core::bundle::single::<_, S, ANY>(self, ray, stats),
             |b| {
                 b.route(&self.bounds, |b| {
                     !self.refs.is_empty() && b.direction_spread() <= MAX_SPREAD

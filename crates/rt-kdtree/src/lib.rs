@@ -140,7 +140,7 @@ pub use bundle::MAX_SPREAD;
 pub use node::Node;
 pub use rt_core::ValidationError;
 
-use rt_core::{Aabb, Accel, BuildStats, Hit, Primitive, Ray, Stats};
+use rt_core::{Aabb, Accel, BuildStats, Hit, Primitive, Ray, RayQuery, Stats};
 
 /// The deepest a tree may be (the size of the fixed traversal stack); `max_depth` is clamped to it.
 pub const MAX_DEPTH: usize = 64;
@@ -301,16 +301,34 @@ impl<P: Primitive> KdTree<P> {
         self.traversal
     }
 
-    /// One ray by the tree's traversal: the closest hit, or for `ANY` a hit (`Some`) if any.
+    /// One ray by the tree's traversal, for query `q`: with a mailbox for a repeatable query,
+    /// else remembering every primitive tested ([`rt_core::leaf::Seen`]).
     #[inline(always)]
-    fn single<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+    fn single<S: Stats, Q: RayQuery>(&self, ray: &Ray, q: &mut Q, stats: &mut S) {
         // Outside the precondition (NaN, huge origins, ...): answer at once, walk nothing.
         if !ray.is_valid() {
-            return None;
+            return;
         }
+        if Q::REPEATABLE {
+            let mut mailbox = rt_core::Mailbox::<{ traverse::MAILBOX }>::new();
+            self.walk(ray, q, &mut mailbox, stats);
+        } else {
+            rt_core::Visited::with(self.prims.len(), |seen| self.walk(ray, q, seen, stats));
+        }
+    }
+
+    /// The tree's traversal.
+    #[inline(always)]
+    fn walk<S: Stats, Q: RayQuery, M: rt_core::leaf::Seen>(
+        &self,
+        ray: &Ray,
+        q: &mut Q,
+        seen: &mut M,
+        stats: &mut S,
+    ) {
         match self.traversal {
-            Traversal::Stack => self.traverse_stack::<S, ANY>(ray, stats),
-            Traversal::Restart => self.traverse_restart::<S, ANY>(ray, stats),
+            Traversal::Stack => self.traverse_stack(ray, q, seen, stats),
+            Traversal::Restart => self.traverse_restart(ray, q, seen, stats),
         }
     }
 
@@ -365,13 +383,8 @@ impl<P: Primitive> Accel for KdTree<P> {
     }
 
     #[inline]
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        self.single::<S, false>(ray, stats)
-    }
-
-    #[inline]
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.single::<S, true>(ray, stats).is_some()
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        self.single(ray, query, stats);
     }
 
     /// Packet traversal in the bundle's direction octant (`bundle.rs`).

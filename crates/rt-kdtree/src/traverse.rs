@@ -14,11 +14,12 @@
 //! found.
 
 use crate::{KdTree, MAX_DEPTH, Node};
+use rt_core::leaf::{self, Seen};
 use rt_core::trace::{self, Event, Place, Take};
-use rt_core::{Hit, Mailbox, Primitive, Ray, SLAB_FAR_SCALE, Stack, Stats, leaf};
+use rt_core::{Primitive, Ray, RayQuery, SLAB_FAR_SCALE, Stack, Stats};
 
 /// Mailbox slots per ray: the last this many primitives tested are not tested again.
-const MAILBOX: usize = 8;
+pub(crate) const MAILBOX: usize = 8;
 
 /// Where the ray goes at one interior node.
 enum Step {
@@ -107,63 +108,59 @@ fn place(nodes: &[Node], i: usize) -> Place {
 }
 
 impl<P: Primitive> KdTree<P> {
-    /// Tests a leaf's primitives against `[ray.t_min, best.t]`. Returns true if `ANY` and one hit.
+    /// Tests a leaf's primitives against `[ray.t_min, q.t_far()]`, offering `q` the hits.
+    /// Returns true when the query ends the walk.
     #[inline(always)]
-    fn test_leaf<S: Stats, const ANY: bool>(
+    fn test_leaf<S: Stats, Q: RayQuery, M: Seen>(
         &self,
         node: &Node,
         ray: &Ray,
-        best: &mut Hit,
-        mailbox: &mut Mailbox<MAILBOX>,
+        q: &mut Q,
+        seen: &mut M,
         stats: &mut S,
     ) -> bool {
         let first = node.index();
         let ids = &self.refs[first..first + node.count()];
-        leaf::test_primitives::<P, S, ANY, MAILBOX>(
-            &self.prims,
-            ids,
-            ray,
-            best,
-            mailbox,
-            true,
-            stats,
-        )
+        leaf::test_primitives(&self.prims, ids, ray, q, seen, true, stats).is_break()
     }
 
-    /// The scene-box interval and the initial "no hit" record, or `None` if the ray misses.
+    /// The scene-box interval, or `None` if the ray misses.
     #[inline(always)]
-    fn start(&self, ray: &Ray) -> Option<(f32, f32, Hit)> {
+    fn start(&self, ray: &Ray, t_far: f32) -> Option<(f32, f32)> {
         if self.refs.is_empty() {
             return None;
         }
-        let (t0, t1) = self.bounds.intersect(ray, ray.t_max)?;
-        Some((t0, t1, leaf::no_hit(ray.t_max)))
+        self.bounds.intersect(ray, t_far)
     }
 
-    /// Stack traversal. `ANY = false` finds the closest hit; `ANY = true` returns at the first.
+    /// Stack traversal.
     #[inline(always)]
-    pub(crate) fn traverse_stack<S: Stats, const ANY: bool>(
+    pub(crate) fn traverse_stack<S: Stats, Q: RayQuery, M: Seen>(
         &self,
         ray: &Ray,
+        q: &mut Q,
+        seen: &mut M,
         stats: &mut S,
-    ) -> Option<Hit> {
-        let (t0, t1, mut best) = self.start(ray)?;
-        self.stack_walk::<S, ANY>(ray, t0, t1, &mut best, stats);
-        leaf::answer::<ANY>(best)
+    ) {
+        if let Some((t0, t1)) = self.start(ray, q.t_far()) {
+            self.stack_walk(ray, t0, t1, q, seen, stats);
+        }
     }
 
-    /// The stack walk from the root over `[t0, t1]`, updating `best`. Returns true on an any-hit.
+    /// The stack walk from the root over `[t0, t1]`, offering `q` the hits. Returns true when
+    /// the query ends the walk.
     ///
     /// Far children are pushed with their intervals; a popped one is skipped if it starts beyond
     /// the best hit. The stack holds at most one entry per level, and the builder bounds the depth
     /// by `MAX_DEPTH`.
     #[inline(always)]
-    fn stack_walk<S: Stats, const ANY: bool>(
+    fn stack_walk<S: Stats, Q: RayQuery, M: Seen>(
         &self,
         ray: &Ray,
         mut t0: f32,
         mut t1: f32,
-        best: &mut Hit,
+        q: &mut Q,
+        seen: &mut M,
         stats: &mut S,
     ) -> bool {
         let r = RayAxes::new(ray);
@@ -173,7 +170,6 @@ impl<P: Primitive> KdTree<P> {
         // the zeroed array it replaced, which the compiler had already left uninitialised.)
         let mut stack = Stack::<(u32, f32, f32), MAX_DEPTH>::new();
         let mut current = 0;
-        let mut mailbox = Mailbox::new();
         loop {
             stats.node_visit();
             let node = &nodes[current];
@@ -208,7 +204,7 @@ impl<P: Primitive> KdTree<P> {
                 };
                 continue;
             }
-            if self.test_leaf::<S, ANY>(node, ray, best, &mut mailbox, stats) {
+            if self.test_leaf(node, ray, q, seen, stats) {
                 return true;
             }
             loop {
@@ -216,7 +212,7 @@ impl<P: Primitive> KdTree<P> {
                     trace::report(stats, || Event::Note("stack empty: done"));
                     return false;
                 };
-                let skipped = a0 > best.t * SLAB_FAR_SCALE;
+                let skipped = a0 > q.t_far() * SLAB_FAR_SCALE;
                 trace::report(stats, || Event::Pop {
                     place: place(nodes, index as usize),
                     t: a0,
@@ -242,18 +238,21 @@ impl<P: Primitive> KdTree<P> {
     /// finishes with [`stack_walk`](Self::stack_walk), which visits both sides. Such rays need
     /// coordinates that coincide to within 2⁻¹⁶, so they are rare, and the answer stays exact.
     #[inline(always)]
-    pub(crate) fn traverse_restart<S: Stats, const ANY: bool>(
+    pub(crate) fn traverse_restart<S: Stats, Q: RayQuery, M: Seen>(
         &self,
         ray: &Ray,
+        q: &mut Q,
+        seen: &mut M,
         stats: &mut S,
-    ) -> Option<Hit> {
-        let (mut t0, t_end, mut best) = self.start(ray)?;
+    ) {
+        let Some((mut t0, t_end)) = self.start(ray, q.t_far()) else {
+            return;
+        };
         let r = RayAxes::new(ray);
         let nodes = &self.nodes[..];
         let mut top = 0;
         let mut exit_node = usize::MAX;
         let mut restarted = false;
-        let mut mailbox = Mailbox::new();
         loop {
             let mut current = top;
             let mut t1 = t_end;
@@ -299,8 +298,8 @@ impl<P: Primitive> KdTree<P> {
                         trace::report(stats, || {
                             Event::Note("a plane at the interval's end: finish with the stack walk")
                         });
-                        self.stack_walk::<S, ANY>(ray, t0, t_end, &mut best, stats);
-                        return leaf::answer::<ANY>(best);
+                        self.stack_walk(ray, t0, t_end, q, seen, stats);
+                        return;
                     }
                 };
                 if !branched {
@@ -308,11 +307,11 @@ impl<P: Primitive> KdTree<P> {
                 }
                 current = next;
             }
-            if self.test_leaf::<S, ANY>(&nodes[current], ray, &mut best, &mut mailbox, stats)
+            if self.test_leaf(&nodes[current], ray, q, seen, stats)
                 || t1 >= t_end
-                || t1 > best.t * SLAB_FAR_SCALE
+                || t1 > q.t_far() * SLAB_FAR_SCALE
             {
-                return leaf::answer::<ANY>(best);
+                return;
             }
             t0 = t1;
             exit_node = leaf_exit;

@@ -54,7 +54,7 @@ impl<P: Primitive> Octree<P> {
             rays,
             slots,
             stats,
-            |ray, stats| self.walk::<S, ANY>(ray, stats),
+            |ray, stats| rt_core::bundle::single::<_, S, ANY>(self, ray, stats),
             |b| b.route(&self.bounds, |b| !self.refs.is_empty() && coherent(b)),
             // Inlined, so that the walk is compiled with the vector instructions `walk_groups` runs
             // with (`Isa::run`).

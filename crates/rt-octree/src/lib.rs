@@ -127,7 +127,7 @@ pub use builder::MAX_DEPTH;
 pub use node::{Block, Node};
 pub use rt_core::ValidationError;
 
-use rt_core::{Aabb, Accel, BuildStats, Hit, Primitive, Ray, Stats};
+use rt_core::{Aabb, Accel, BuildStats, Hit, Primitive, Ray, RayQuery, Stats};
 
 /// Build and traversal parameters. `Default` is [`OctreeParams::standard`].
 #[derive(Clone, Debug, PartialEq)]
@@ -271,13 +271,8 @@ impl<P: Primitive> Accel for Octree<P> {
     }
 
     #[inline]
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        self.walk::<S, false>(ray, stats)
-    }
-
-    #[inline]
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.walk::<S, true>(ray, stats).is_some()
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        self.query(ray, query, stats);
     }
 
     /// A packet walk in the bundle's direction octant (`bundle.rs`).

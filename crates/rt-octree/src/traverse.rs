@@ -40,8 +40,11 @@ use crate::Octree;
 use crate::builder::MAX_DEPTH;
 use crate::node::{Block, Node};
 use rt_core::glam::{BVec3A, Vec3A};
+use rt_core::leaf::{self, Seen};
 use rt_core::trace::{self, Event, Place};
-use rt_core::{Aabb, Hit, Mailbox, NEAR_TIE, Primitive, Ray, SLAB_FAR_SCALE, Stack, Stats, leaf};
+use rt_core::{
+    Aabb, Mailbox, NEAR_TIE, Primitive, Ray, RayQuery, SLAB_FAR_SCALE, Stack, Stats, Visited,
+};
 
 /// Mailbox slots per ray: the last this many primitives tested are not tested again.
 pub(crate) const MAILBOX: usize = 8;
@@ -275,12 +278,29 @@ fn report_children<S: Stats>(
 }
 
 impl<P: Primitive> Octree<P> {
-    /// The walk. `ANY = false` finds the closest hit; `ANY = true` returns at the first.
+    /// The walk for query `q`: with a mailbox for a repeatable query, else remembering every
+    /// primitive tested ([`Seen`]).
     #[inline(always)]
-    pub(crate) fn walk<S: Stats, const ANY: bool>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+    pub(crate) fn query<S: Stats, Q: RayQuery>(&self, ray: &Ray, q: &mut Q, stats: &mut S) {
+        if Q::REPEATABLE {
+            self.walk(ray, q, &mut Mailbox::<MAILBOX>::new(), stats);
+        } else {
+            Visited::with(self.prims.len(), |seen| self.walk(ray, q, seen, stats));
+        }
+    }
+
+    /// The walk.
+    #[inline(always)]
+    fn walk<S: Stats, Q: RayQuery, M: Seen>(
+        &self,
+        ray: &Ray,
+        q: &mut Q,
+        seen: &mut M,
+        stats: &mut S,
+    ) {
         // Outside the precondition (NaN, huge origins, ...): answer at once, walk nothing.
         if self.refs.is_empty() || !ray.is_valid() {
-            return None;
+            return;
         }
         let r = RayAxes::new(ray);
         let (lo, hi) = (Vec3A::from(self.bounds.min), Vec3A::from(self.bounds.max));
@@ -291,22 +311,15 @@ impl<P: Primitive> Octree<P> {
         if !inside_flat.all()
             || t_enter > widen(t_exit)
             || t_exit < t_from
-            || t_enter > ray.t_max * SLAB_FAR_SCALE
+            || t_enter > q.t_far() * SLAB_FAR_SCALE
         {
-            return None;
+            return;
         }
-        let mut best = leaf::no_hit(ray.t_max);
-        let mut mailbox = Mailbox::<MAILBOX>::new();
-        let mut test = |node: &Node, best: &mut Hit, stats: &mut S| {
-            leaf::test_primitives::<P, S, ANY, MAILBOX>(
-                &self.prims,
-                &self.refs[node.references()],
-                ray,
-                best,
-                &mut mailbox,
-                self.mailbox,
-                stats,
-            )
+        // A query that wants each hit once is remembered exactly, whatever the ablation says.
+        let dedupe = self.mailbox || !Q::REPEATABLE;
+        let mut test = |node: &Node, q: &mut Q, stats: &mut S| {
+            let ids = &self.refs[node.references()];
+            leaf::test_primitives(&self.prims, ids, ray, q, seen, dedupe, stats).is_break()
         };
         stats.node_visit();
         trace::report(stats, || {
@@ -317,8 +330,8 @@ impl<P: Primitive> Octree<P> {
             enter(place, lo, hi, slabs)
         });
         let Some(block) = self.root.children() else {
-            test(&self.root, &mut best, stats);
-            return leaf::answer::<ANY>(best);
+            test(&self.root, q, stats);
+            return;
         };
         let (order, left) = children_order(&r, lo, hi, slabs, &self.blocks[block], t_from);
         let b = (block as u32, &self.blocks[block]);
@@ -350,9 +363,9 @@ impl<P: Primitive> Octree<P> {
             );
             let node = self.blocks[f.block as usize].0[i as usize];
             let slabs = r.slabs(lo, hi);
-            if slabs.0.max_element() > best.t * SLAB_FAR_SCALE {
+            if slabs.0.max_element() > q.t_far() * SLAB_FAR_SCALE {
                 trace::report(stats, || {
-                    Event::Note("the next child starts beyond the best hit: done")
+                    Event::Note("the next child starts beyond the query's far end: done")
                 });
                 break;
             }
@@ -360,8 +373,8 @@ impl<P: Primitive> Octree<P> {
             trace::report(stats, || enter(place(&node, f.block, i), lo, hi, slabs));
             match node.children() {
                 None => {
-                    if test(&node, &mut best, stats) {
-                        trace::report(stats, || Event::Note("a primitive blocks the ray: done"));
+                    if test(&node, q, stats) {
+                        trace::report(stats, || Event::Note("the query ends the walk: done"));
                         break;
                     }
                 }
@@ -380,6 +393,5 @@ impl<P: Primitive> Octree<P> {
                 }
             }
         }
-        leaf::answer::<ANY>(best)
     }
 }

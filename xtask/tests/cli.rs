@@ -555,11 +555,10 @@ fn ply_and_gltf_files_run_and_broken_ones_are_one_line_errors() {
 /// Issue 15's closest-point acceptance, and issue 29's box overlap: on every shared mesh, each
 /// structure's default preset answers 4,000 closest-point queries and 1,000 box queries exactly
 /// as brute force does (all of them checked).
-#[test]
-fn closest_points_and_box_overlaps_agree_with_brute_force_on_every_shared_mesh() {
-    let Some(dir) = shared_meshes_dir() else {
-        return;
-    };
+/// The shared meshes' OBJ files, sorted (`None` outside CI when the meshes are not there; under
+/// CI their absence fails).
+fn shared_obj_meshes() -> Option<Vec<std::path::PathBuf>> {
+    let dir = shared_meshes_dir()?;
     let mut meshes: Vec<_> = std::fs::read_dir(&dir)
         .unwrap()
         .map(|e| e.unwrap().path())
@@ -567,6 +566,14 @@ fn closest_points_and_box_overlaps_agree_with_brute_force_on_every_shared_mesh()
         .collect();
     meshes.sort();
     assert!(meshes.len() >= 10, "{meshes:?}");
+    Some(meshes)
+}
+
+#[test]
+fn closest_points_and_box_overlaps_agree_with_brute_force_on_every_shared_mesh() {
+    let Some(meshes) = shared_obj_meshes() else {
+        return;
+    };
     for mesh in &meshes {
         let v = json(&compare(&[
             "--scene",
@@ -621,6 +628,54 @@ fn closest_points_and_box_overlaps_agree_with_brute_force_on_every_shared_mesh()
             assert!(
                 hits > 200 && hits < 1000,
                 "boxes that meet the mesh and boxes that miss it; {r}"
+            );
+        }
+    }
+}
+
+#[test]
+fn all_hits_and_filtered_hits_agree_with_brute_force_on_every_shared_mesh() {
+    let Some(meshes) = shared_obj_meshes() else {
+        return;
+    };
+    // Primary rays: many cross the mesh several times, and the alpha mask lets them on through
+    // its holes (the any-hit answer is checked beside the closest).
+    for (query, rays) in [("all-hits", "primary"), ("filtered", "primary")] {
+        for mesh in &meshes {
+            let v = json(&compare(&[
+                "--scene",
+                mesh.to_str().unwrap(),
+                "--query",
+                query,
+                "--rays",
+                rays,
+                "--structures",
+                "bvh,bvh-binary,kdtree,grid,hgrid,octree",
+                "--width",
+                "64",
+                "--height",
+                "48",
+                "--check-rays",
+                "1000",
+                "--repeats",
+                "1",
+                "--json",
+            ]));
+            assert_eq!(v["query"], query);
+            // Shadow rays start at the primary hits only: fewer than 1000 on some meshes.
+            let rays = v["rays"].as_u64().unwrap();
+            assert_eq!(v["checked_rays"], rays.min(1000), "{}", mesh.display());
+            let rows = v["results"].as_array().unwrap();
+            assert_eq!(rows.len(), 7);
+            for r in rows {
+                assert_eq!(r["mismatches"], 0, "{query}, {}: {r}", mesh.display());
+            }
+            // Rays that find something and rays that do not, or the check proves little.
+            let share = v["hit_share"].as_f64().unwrap();
+            assert!(
+                share > 0.02 && share < 0.98,
+                "{query}, {}: {share}",
+                mesh.display()
             );
         }
     }

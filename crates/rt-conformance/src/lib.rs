@@ -49,6 +49,7 @@ pub use rt_core;
 
 mod boxes;
 mod bundles;
+mod hits;
 mod instances;
 mod refit;
 pub use boxes::{BoxMismatch, compare_boxes, scene_boxes};
@@ -56,6 +57,7 @@ pub use bundles::{
     BUNDLE_SIZES, bundle_orders, check_coherent_bundles, check_coherent_bundles_on,
     compare_bundles, same_bits,
 };
+pub use hits::{FILTERS, Filter, HitsMismatch, compare_hits, hits_one_by_one};
 pub use instances::{
     BottomBuilder, InstancedCase, Placement, TWO_LEVEL_SCENES, check_two_level_case,
     check_two_level_random, check_two_level_scene, two_level_scene,
@@ -481,6 +483,12 @@ fn check_queries<A: Accel + 'static>(
                 .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
             let boxes = scene_boxes(&prims, prims.len() as u64);
             boxes::compare_boxes_probed(&accel, &reference, &boxes, probe)
+                .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
+            // Every ray of small cases, an even spread of at most `HITS_RAYS` of large ones: each
+            // ray runs seven more walks here, most of them to the ray's end.
+            let stride = rays.len().div_ceil(hits::HITS_RAYS).max(1);
+            let some: Vec<Ray> = rays.iter().step_by(stride).copied().collect();
+            hits::compare_hits_probed(&accel, &prims, &some, probe)
                 .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
         }
         Ok(())

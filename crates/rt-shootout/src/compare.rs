@@ -15,5 +15,6 @@ pub use crate::data::{Disagreement, Report, Row, predicted_per_ray};
 pub use crate::scene::load_scene;
 pub use args::{Args, QueryKind, RayKind, ViewKind, after_help};
 pub use output::to_table;
+pub use points::alpha_mask;
 pub use run::run;
 pub(crate) use run::{Source, build_fastest, checked_subset};

@@ -12,7 +12,7 @@ use rt_bvh::Bvh;
 use rt_core::glam::Vec3;
 use rt_core::{
     Aabb, Accel, BallQuery, BruteForce, BuildStats, Counters, DynAccel, Hit, Instance, NoStats,
-    OverlapQuery, PointHit, Ray, Refit, RefitError, Region, Shape, Stats, Trace, Triangle,
+    OverlapQuery, PointHit, PrimHit, Ray, Refit, RefitError, Region, Shape, Stats, Trace, Triangle,
     TwoLevel,
 };
 use rt_grid::Grid;
@@ -225,6 +225,70 @@ pub fn overlap_timed(s: &dyn DynAccel<Triangle>, boxes: &[Aabb]) -> usize {
                     s.box_query_dyn(&mut query, None);
                     !query.into_ids().is_empty()
                 })
+                .count()
+        })
+        .sum()
+}
+
+/// Every ray's hits ([`rt_core::Accel::all_hits`]: sorted, each primitive once), counted.
+pub fn all_hits_counted(s: &dyn DynAccel<Triangle>, rays: &[Ray]) -> (Vec<Vec<Hit>>, Counters) {
+    let (found, counters) = counted_chunks(rays, |rays, out, c| {
+        for (r, slot) in rays.iter().zip(out) {
+            *slot = Some(s.all_hits_dyn(r, Some(c)));
+        }
+    });
+    (
+        found.into_iter().map(Option::unwrap_or_default).collect(),
+        counters,
+    )
+}
+
+/// How many rays hit something, every hit collected as a caller of `all_hits` gets them,
+/// without counters: the timed pass.
+pub fn all_hits_timed(s: &dyn DynAccel<Triangle>, rays: &[Ray]) -> usize {
+    rays.par_chunks(CHUNK)
+        .map(|rays| {
+            rays.iter()
+                .filter(|r| !s.all_hits_dyn(r, None).is_empty())
+                .count()
+        })
+        .sum()
+}
+
+/// Every ray's closest hit and whether it is occluded, both through `filter`; the closest hits
+/// counted.
+pub fn filtered_counted(
+    s: &dyn DynAccel<Triangle>,
+    rays: &[Ray],
+    filter: fn(u32, &PrimHit) -> bool,
+) -> (Vec<(Option<Hit>, bool)>, Counters) {
+    let (found, counters) = counted_chunks(rays, |rays, out, c| {
+        for (r, slot) in rays.iter().zip(out) {
+            // The counters follow the closest hit, the query the timed pass makes.
+            let hit = s.intersect_filtered_dyn(r, &mut { filter }, Some(c));
+            *slot = Some((hit, s.occluded_filtered_dyn(r, &mut { filter }, None)));
+        }
+    });
+    (
+        found
+            .into_iter()
+            .map(|a| a.unwrap_or((None, false)))
+            .collect(),
+        counters,
+    )
+}
+
+/// How many rays hit something through `filter` (closest hit), without counters: the timed
+/// pass.
+pub fn filtered_timed(
+    s: &dyn DynAccel<Triangle>,
+    rays: &[Ray],
+    filter: fn(u32, &PrimHit) -> bool,
+) -> usize {
+    rays.par_chunks(CHUNK)
+        .map(|rays| {
+            rays.iter()
+                .filter(|r| s.intersect_filtered_dyn(r, &mut { filter }, None).is_some())
                 .count()
         })
         .sum()

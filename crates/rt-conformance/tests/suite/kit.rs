@@ -4,7 +4,8 @@
 use rt_conformance::{STALL_LIMIT, check_case_within, check_random, scene};
 use rt_core::glam::Vec3;
 use rt_core::{
-    Aabb, Accel, BallQuery, BoxQuery, BruteForce, BuildStats, Hit, Primitive, Ray, Stats, Triangle,
+    Aabb, Accel, BallQuery, BoxQuery, BruteForce, BuildStats, Hit, PrimHit, Primitive, Ray,
+    RayQuery, Stats, Triangle,
 };
 use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -739,5 +740,86 @@ fn a_closest_point_on_the_wrong_feature_fails_the_kit() {
     assert!(
         e.contains("closest_point disagrees with brute force") && e.contains("feature"),
         "{e}"
+    );
+}
+
+/// Brute force whose ray queries beyond the closest and any hit are wrong on purpose: it offers
+/// every hit twice (`MODE` 0), goes on offering after the query stopped (1), or answers
+/// filtered queries without the filter (2).
+struct RaysWrong<const MODE: u8>(BruteForce<Triangle>);
+
+impl<const MODE: u8> Accel for RaysWrong<MODE> {
+    forward_to_brute_force!();
+    const NAME: &'static str = "rays-wrong";
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        self.0.intersect_with(ray, stats)
+    }
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.ball_query(query, stats);
+    }
+    fn box_query<Q: BoxQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.box_query(query, stats);
+    }
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        if MODE == 2 {
+            self.0.ray_query(ray, query, stats);
+        } else {
+            self.0
+                .ray_query(ray, &mut WrongRays::<Q, MODE>(query), stats);
+        }
+    }
+    fn intersect_filtered<F: FnMut(u32, &PrimHit) -> bool>(
+        &self,
+        ray: &Ray,
+        filter: F,
+    ) -> Option<Hit> {
+        if MODE == 2 {
+            self.0.intersect(ray)
+        } else {
+            self.0.intersect_filtered(ray, filter)
+        }
+    }
+}
+
+/// The query [`RaysWrong`] hands brute force.
+struct WrongRays<'a, Q, const MODE: u8>(&'a mut Q);
+
+impl<Q: RayQuery, const MODE: u8> RayQuery for WrongRays<'_, Q, MODE> {
+    const OCCLUSION: bool = Q::OCCLUSION;
+    const REPEATABLE: bool = Q::REPEATABLE;
+    fn t_far(&self) -> f32 {
+        self.0.t_far()
+    }
+    fn offer(&mut self, prim: u32, hit: PrimHit) -> ControlFlow<()> {
+        if MODE == 0 {
+            self.0.offer(prim, hit)?;
+            return self.0.offer(prim, hit);
+        }
+        let _ = self.0.offer(prim, hit);
+        ControlFlow::Continue(())
+    }
+}
+
+#[test]
+fn ray_queries_that_repeat_a_hit_go_on_after_a_stop_or_drop_the_filter_fail_the_kit() {
+    let s = scene("shared_edge");
+    let check = |e: Result<(), String>, what: &str, want: &str| {
+        let e = e.expect_err(what);
+        assert!(e.contains(want) && e.contains("rays-file line:"), "{e}");
+    };
+    check(
+        check_case_within::<RaysWrong<0>>(&(), &s.triangles, &s.rays, STALL_LIMIT),
+        "a hit offered twice must be caught",
+        "all_hits disagrees with brute force",
+    );
+    check(
+        check_case_within::<RaysWrong<1>>(&(), &s.triangles, &s.rays, STALL_LIMIT),
+        "offers after the query stopped must be caught",
+        "ray_query (stopping) disagrees",
+    );
+    check(
+        check_case_within::<RaysWrong<2>>(&(), &s.triangles, &s.rays, STALL_LIMIT),
+        "a filter ignored must be caught",
+        "intersect_filtered disagrees",
     );
 }

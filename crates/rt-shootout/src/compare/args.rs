@@ -16,6 +16,11 @@ pub enum QueryKind {
     /// Box overlap queries: the primitives meeting a box around each of `--points` points
     /// (`--box-size` says how large).
     Overlap,
+    /// Every hit along each ray (`--rays` says which), sorted by distance.
+    AllHits,
+    /// Closest and any hits through an alpha mask: a checkerboard over each triangle's
+    /// barycentric coordinates cuts away half of every triangle (`--rays` says which rays).
+    Filtered,
 }
 
 impl QueryKind {
@@ -25,6 +30,8 @@ impl QueryKind {
             QueryKind::Rays => "rays",
             QueryKind::ClosestPoint => "closest-point",
             QueryKind::Overlap => "overlap",
+            QueryKind::AllHits => "all-hits",
+            QueryKind::Filtered => "filtered",
         }
     }
 }
@@ -79,8 +86,9 @@ pub struct Args {
     /// kdtree, grid), and write `grade.json` and `grade.md` into `--out DIR` (default `grade`).
     #[arg(long, value_name = "ROW")]
     pub grade: Option<String>,
-    /// Which query to measure: rays, closest points (nearest primitive to a point), or box
-    /// overlap (the primitives meeting a box).
+    /// Which query to measure: rays, closest points (nearest primitive to a point), box
+    /// overlap (the primitives meeting a box), all hits along a ray, or hits through an alpha
+    /// mask.
     #[arg(long, value_enum, default_value_t = QueryKind::Rays)]
     pub query: QueryKind,
     /// Closest-point and box overlap queries: how many query points (half uniform in the scene

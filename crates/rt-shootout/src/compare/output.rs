@@ -13,15 +13,21 @@ pub fn to_table(r: &Report) -> String {
     let (unit, units) = match r.ray_kind {
         points::KIND => ("query", "closest-point queries"),
         points::OVERLAP_KIND => ("query", "box overlap queries"),
+        points::ALL_HITS_KIND => ("ray", "all-hits queries"),
+        points::FILTERED_KIND => ("ray", "filtered queries (alpha mask)"),
         _ => ("ray", "rays"),
     };
     if points::is_query_kind(r.ray_kind) {
-        let met = r.hit_share().map_or(String::new(), |h| {
-            format!(" ({:.1}% meet the mesh)", 100.0 * h)
-        });
+        let (on, verb) = match r.view {
+            "" => (String::new(), "meet the mesh"),
+            rays => (format!(" on {rays}"), "hit"),
+        };
+        let met = r
+            .hit_share()
+            .map_or(String::new(), |h| format!(" ({:.1}% {verb})", 100.0 * h));
         let _ = writeln!(
             s,
-            "scene {} ({} triangles, {} valid), {} {units}{met}, {} threads; {} checked against brute force",
+            "scene {} ({} triangles, {} valid), {} {units}{on}{met}, {} threads; {} checked against brute force",
             r.scene, r.triangles, r.valid_triangles, r.rays, r.threads, r.checked_rays
         );
     } else {

@@ -1,16 +1,18 @@
-//! `compare --query closest-point` and `compare --query overlap`: the shootout for queries that
-//! are not rays.
+//! `compare --query closest-point`, `overlap`, `all-hits` and `filtered`: the shootout for
+//! queries beyond the closest and any hit.
 //!
-//! Every row answers the same queries: closest points to [`raygen::query_points`], or the
-//! primitives meeting boxes around them ([`overlap_boxes`]). Brute force checks a random subset,
-//! the rows are checked against each other on every query, and brute force settles every query
-//! on which they disagree, as for rays. One generic core, [`measure_queries`], runs both kinds
-//! ([`Queries`] says how each asks and compares).
+//! Every row answers the same queries: closest points to [`raygen::query_points`], the
+//! primitives meeting boxes around them ([`overlap_boxes`]), every hit along the rays `--rays`
+//! names, or those rays' closest and any hits through an alpha mask ([`alpha_mask`]). Brute
+//! force checks a random subset, the rows are checked against each other on every query, and
+//! brute force settles every query on which they disagree, as for rays. One generic core,
+//! [`measure_queries`], runs every kind ([`Queries`] says how each asks and compares).
 
+use super::run::make_rays;
 use super::{Args, Report, Row, Source, build_fastest, checked_subset};
 use crate::structures;
 use rt_core::glam::Vec3;
-use rt_core::{Aabb, Counters, DynAccel, PointHit, Primitive, Rng, Triangle};
+use rt_core::{Aabb, Counters, DynAccel, Hit, PointHit, PrimHit, Primitive, Ray, Rng, Triangle};
 use rt_scene::raygen;
 use std::fmt::Debug;
 use std::time::{Duration, Instant};
@@ -21,9 +23,22 @@ pub const KIND: &str = "closest-point";
 /// The report's `ray_kind` for box overlap queries.
 pub const OVERLAP_KIND: &str = "overlap";
 
-/// Whether a report holds queries other than rays.
+/// The report's `ray_kind` for all-hits queries.
+pub const ALL_HITS_KIND: &str = "all-hits";
+
+/// The report's `ray_kind` for filtered queries.
+pub const FILTERED_KIND: &str = "filtered";
+
+/// Whether a report holds queries other than closest and any hits.
 pub fn is_query_kind(kind: &str) -> bool {
-    kind == KIND || kind == OVERLAP_KIND
+    [KIND, OVERLAP_KIND, ALL_HITS_KIND, FILTERED_KIND].contains(&kind)
+}
+
+/// The alpha mask of `compare --query filtered`: a checkerboard of 8 × 8 squares over each
+/// triangle's barycentric coordinates `(u, v)`, the squares with an odd sum of indices cut
+/// away, so every triangle keeps about half its surface.
+pub fn alpha_mask(_prim: u32, hit: &PrimHit) -> bool {
+    ((hit.u * 8.0) as u32 + (hit.v * 8.0) as u32).is_multiple_of(2)
 }
 
 /// A query on which a row disagreed with brute force: the query as Rust source to paste into a
@@ -43,8 +58,8 @@ trait Queries {
     type Query: Copy + Send + Sync;
     type Answer: Clone + Debug + Send + Sync;
     const KIND: &'static str;
-    /// The queries the rows answer.
-    fn queries(args: &Args, tris: &[Triangle], bounds: &Aabb) -> Result<Vec<Self::Query>, String>;
+    /// The queries the rows answer, and the view they come from (empty if none).
+    fn queries(args: &Args, source: &Source) -> Result<(Vec<Self::Query>, &'static str), String>;
     /// Every answer, counted.
     fn counted(s: &dyn DynAccel<Triangle>, q: &[Self::Query]) -> (Vec<Self::Answer>, Counters);
     /// How many queries found something, uncounted: the timed pass.
@@ -61,15 +76,13 @@ impl Queries for ClosestPoints {
     type Query = (Vec3, f32);
     type Answer = Option<PointHit>;
     const KIND: &'static str = KIND;
-    fn queries(args: &Args, tris: &[Triangle], bounds: &Aabb) -> Result<Vec<(Vec3, f32)>, String> {
+    fn queries(args: &Args, source: &Source) -> Result<(Vec<(Vec3, f32)>, &'static str), String> {
         let max = args.max_distance.unwrap_or(f32::INFINITY);
         if max.is_nan() || max < 0.0 {
             return Err(format!("--max-distance must be at least 0, not {max}"));
         }
-        Ok(raygen::query_points(tris, bounds, args.points, args.seed)
-            .into_iter()
-            .map(|p| (p, max))
-            .collect())
+        let points = raygen::query_points(&source.mesh, &source.bounds, args.points, args.seed);
+        Ok((points.into_iter().map(|p| (p, max)).collect(), ""))
     }
     fn counted(s: &dyn DynAccel<Triangle>, q: &[(Vec3, f32)]) -> (Vec<Option<PointHit>>, Counters) {
         structures::closest_counted(s, q)
@@ -98,14 +111,15 @@ impl Queries for Overlaps {
     type Query = Aabb;
     type Answer = Vec<u32>;
     const KIND: &'static str = OVERLAP_KIND;
-    fn queries(args: &Args, tris: &[Triangle], bounds: &Aabb) -> Result<Vec<Aabb>, String> {
+    fn queries(args: &Args, source: &Source) -> Result<(Vec<Aabb>, &'static str), String> {
         let size = args.box_size;
         if !(size > 0.0 && size <= 1.0) {
             return Err(format!(
                 "--box-size must be above 0 and at most 1, not {size}"
             ));
         }
-        Ok(overlap_boxes(tris, bounds, args.points, size, args.seed))
+        let boxes = overlap_boxes(&source.mesh, &source.bounds, args.points, size, args.seed);
+        Ok((boxes, ""))
     }
     fn counted(s: &dyn DynAccel<Triangle>, q: &[Aabb]) -> (Vec<Vec<u32>>, Counters) {
         structures::overlap_counted(s, q)
@@ -124,6 +138,83 @@ impl Queries for Overlaps {
             "overlapping(&Aabb::new(Vec3::new({:?}, {:?}, {:?}), Vec3::new({:?}, {:?}, {:?})))",
             b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
         )
+    }
+}
+
+/// The rays of `--rays` (and `--view`, `--rays-file`), for the queries made of rays.
+/// The report's `view` names the rays, since its `ray_kind` names the query.
+fn ray_queries(args: &Args, source: &Source) -> Result<(Vec<Ray>, &'static str), String> {
+    use super::ViewKind::{Filled, Sparse};
+    let (rays, kind, _) = make_rays(args, source)?;
+    let view = match (kind, args.view) {
+        ("primary", Filled) => "primary rays from the filled view",
+        ("primary", Sparse) => "primary rays from the sparse view",
+        ("shadow", Filled) => "shadow rays from the filled view's hits",
+        ("shadow", Sparse) => "shadow rays from the sparse view's hits",
+        ("incoherent", _) => "incoherent rays",
+        _ => "rays from the file",
+    };
+    Ok((rays, view))
+}
+
+/// The rays as Rust source, every float printed to parse back to its bits.
+fn ray_rust(call: &str, r: &Ray) -> String {
+    format!("{call}(&{})", r.to_rust())
+}
+
+/// Every hit along a ray ([`Accel::all_hits`](rt_core::Accel::all_hits)).
+struct AllHits;
+
+impl Queries for AllHits {
+    type Query = Ray;
+    type Answer = Vec<Hit>;
+    const KIND: &'static str = ALL_HITS_KIND;
+    fn queries(args: &Args, source: &Source) -> Result<(Vec<Ray>, &'static str), String> {
+        ray_queries(args, source)
+    }
+    fn counted(s: &dyn DynAccel<Triangle>, q: &[Ray]) -> (Vec<Vec<Hit>>, Counters) {
+        structures::all_hits_counted(s, q)
+    }
+    fn timed(s: &dyn DynAccel<Triangle>, q: &[Ray]) -> usize {
+        structures::all_hits_timed(s, q)
+    }
+    fn found(a: &Vec<Hit>) -> bool {
+        !a.is_empty()
+    }
+    fn agree(a: &Vec<Hit>, b: &Vec<Hit>) -> bool {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| Hit::agree(Some(*x), Some(*y)))
+    }
+    fn rust(r: &Ray) -> String {
+        ray_rust("all_hits", r)
+    }
+}
+
+/// Closest and any hit through [`alpha_mask`]
+/// ([`Accel::intersect_filtered`](rt_core::Accel::intersect_filtered),
+/// [`Accel::occluded_filtered`](rt_core::Accel::occluded_filtered)).
+struct Filtered;
+
+impl Queries for Filtered {
+    type Query = Ray;
+    type Answer = (Option<Hit>, bool);
+    const KIND: &'static str = FILTERED_KIND;
+    fn queries(args: &Args, source: &Source) -> Result<(Vec<Ray>, &'static str), String> {
+        ray_queries(args, source)
+    }
+    fn counted(s: &dyn DynAccel<Triangle>, q: &[Ray]) -> (Vec<(Option<Hit>, bool)>, Counters) {
+        structures::filtered_counted(s, q, alpha_mask)
+    }
+    fn timed(s: &dyn DynAccel<Triangle>, q: &[Ray]) -> usize {
+        structures::filtered_timed(s, q, alpha_mask)
+    }
+    fn found(a: &(Option<Hit>, bool)) -> bool {
+        a.0.is_some()
+    }
+    fn agree(a: &(Option<Hit>, bool), b: &(Option<Hit>, bool)) -> bool {
+        Hit::agree(a.0, b.0) && a.1 == b.1
+    }
+    fn rust(r: &Ray) -> String {
+        ray_rust("intersect_filtered", r)
     }
 }
 
@@ -169,6 +260,22 @@ pub(super) fn measure_overlap(
     measure_queries::<Overlaps>(args, threads, entries)
 }
 
+pub(super) fn measure_all_hits(
+    args: &Args,
+    threads: usize,
+    entries: Vec<structures::Entry>,
+) -> Result<Report, String> {
+    measure_queries::<AllHits>(args, threads, entries)
+}
+
+pub(super) fn measure_filtered(
+    args: &Args,
+    threads: usize,
+    entries: Vec<structures::Entry>,
+) -> Result<Report, String> {
+    measure_queries::<Filtered>(args, threads, entries)
+}
+
 fn measure_queries<K: Queries>(
     args: &Args,
     threads: usize,
@@ -193,8 +300,7 @@ fn measure_queries<K: Queries>(
     if args.points == 0 {
         return Err("--points must be at least 1".into());
     }
-    let bounds = rt_core::valid_bounds(tris.iter());
-    let queries = K::queries(args, &tris, &bounds)?;
+    let (queries, view) = K::queries(args, &source)?;
     let subset = checked_subset(queries.len(), args.check_rays.unwrap_or(20_000), args.seed);
     let subset_queries: Vec<K::Query> = subset.iter().map(|&i| queries[i]).collect();
 
@@ -259,7 +365,7 @@ fn measure_queries<K: Queries>(
         triangles: tris.len(),
         valid_triangles: valid,
         ray_kind: K::KIND,
-        view: "",
+        view,
         rays: queries.len(),
         threads,
         checked_rays: subset.len() + settled,

@@ -59,6 +59,12 @@ pub fn run(args: &Args, entries: &[structures::Entry]) -> Result<Vec<Report>, St
             QueryKind::Overlap => {
                 pool.install(|| points::measure_overlap(&args, threads, entries))?
             }
+            QueryKind::AllHits => {
+                pool.install(|| points::measure_all_hits(&args, threads, entries))?
+            }
+            QueryKind::Filtered => {
+                pool.install(|| points::measure_filtered(&args, threads, entries))?
+            }
         };
         if args.json {
             println!("{}", to_json(&report));
@@ -440,7 +446,10 @@ pub(crate) fn checked_subset(len: usize, check: usize, seed: u64) -> Vec<usize> 
     idx
 }
 
-fn make_rays(args: &Args, source: &Source) -> Result<(Vec<Ray>, &'static str, Query), String> {
+pub(super) fn make_rays(
+    args: &Args,
+    source: &Source,
+) -> Result<(Vec<Ray>, &'static str, Query), String> {
     let kind = args.rays.unwrap_or(RayKind::Primary);
     let query = if kind == RayKind::Shadow {
         Query::Any

@@ -42,13 +42,14 @@
 //! ```
 //!
 //! # What a structure promises
-//! For a valid ray ([`Ray::is_valid`](crate::Ray::is_valid)) and a query whose `t_far` starts at or below `ray.t_max`,
-//! [`Accel::ray_query`](crate::Accel::ray_query) offers every valid primitive hit in
-//! `[ray.t_min, t_far]`, with `t_far` read as it stands when the primitive is tested, and each
-//! such hit once ([`RayQuery::REPEATABLE`] relaxes that), until an offer returns
-//! [`ControlFlow::Break`]. The hits are those of [`Primitive::intersect`](crate::Primitive)
-//! with `t_max = t_far`, bit for bit. The order is the structure's own: roughly front to back
-//! for the trees and grids, and not sorted by `t`. An invalid ray is offered nothing.
+//! For a valid ray ([`Ray::is_valid`](crate::Ray::is_valid)) and a query whose `t_far` starts
+//! at or below `ray.t_max`, [`Accel::ray_query`](crate::Accel::ray_query) offers every valid
+//! primitive hit in `[ray.t_min, t_far]`, with `t_far` read as it stands when the primitive is
+//! tested, and each such hit once ([`RayQuery::REPEATABLE`] relaxes that), until an offer
+//! returns [`ControlFlow::Break`]. The hits are those of
+//! [`Primitive::intersect`](crate::Primitive) with `t_max = t_far`, bit for bit. The order is
+//! the structure's own: roughly front to back for the trees and grids, and not sorted by `t`.
+//! An invalid ray is offered nothing.
 
 use crate::{Hit, PrimHit};
 use std::ops::ControlFlow;
@@ -376,8 +377,15 @@ impl<'a, Q: RayQuery> RayOfBox<'a, Q> {
         let (t0, t1) = scene.intersect(ray, query.t_far())?;
         let (a, b) = (ray.at(t0), ray.at(t1));
         // The hit points lie on the segment up to rounding in the primitive tests and in
-        // `at`: widen by a relative 2⁻¹⁶ of the largest coordinate, far above either.
-        let size = a.abs().max(b.abs()).max_element();
+        // `at`, whose error follows the origin's and the step's size, not the point's (an
+        // origin at 10¹² reaching a scene at 1): widen by a relative 2⁻¹⁶ of the largest of
+        // them, far above either.
+        let step = ray.dir().abs().max_element() * t0.abs().max(t1.abs());
+        let size = a
+            .abs()
+            .max(b.abs())
+            .max_element()
+            .max(ray.origin.abs().max_element() + step);
         let pad = glam::Vec3::splat(size * (1.0 / 65536.0) + f32::MIN_POSITIVE);
         let bounds = crate::Aabb::new(a.min(b) - pad, a.max(b) + pad);
         Some(Self {

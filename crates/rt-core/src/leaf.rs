@@ -7,19 +7,8 @@
 
 use crate::query::BLOCKS;
 use crate::trace::{self, Event};
-use crate::{BoxQuery, Hit, Mailbox, Primitive, Ray, RayQuery, Stats, Visited};
+use crate::{BoxQuery, Mailbox, Primitive, Ray, RayQuery, Stats, Visited};
 use std::ops::ControlFlow;
-
-/// The "no hit yet" record of a ray whose interval ends at `t_max`.
-#[inline(always)]
-pub fn no_hit(t_max: f32) -> Hit {
-    Hit {
-        prim: u32::MAX,
-        t: t_max,
-        u: 0.0,
-        v: 0.0,
-    }
-}
 
 /// How a walk remembers the primitives it has tested, so that a primitive listed in several
 /// cells is tested once: a [`Mailbox`] of the last few (enough for closest and any hits, which
@@ -95,21 +84,6 @@ pub fn offer_hit<P: Primitive, S: Stats, Q: RayQuery>(
         Some(h) => query.offer(id, h),
         None => ControlFlow::Continue(()),
     }
-}
-
-/// The answer a walk that kept `best` (starting from [`no_hit`]) returns: `None` if nothing was
-/// hit; for `ANY` queries the hit with `t` set to NaN, since the first hit found need not be the
-/// closest.
-#[inline(always)]
-pub fn answer<const ANY: bool>(best: Hit) -> Option<Hit> {
-    (best.prim != u32::MAX).then_some(if ANY {
-        Hit {
-            t: f32::NAN,
-            ..best
-        }
-    } else {
-        best
-    })
 }
 
 /// Offers a box query the primitives `ids` (indices into `prims`) of a leaf or cell, each only

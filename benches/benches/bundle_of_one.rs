@@ -98,17 +98,7 @@ fn rows(scene: &BenchScene, passes: usize) -> Vec<(&'static str, f64, f64)> {
 }
 
 fn main() {
-    let mut passes = 5;
-    let mut args = std::env::args().skip(1);
-    while let Some(a) = args.next() {
-        if a == "--passes" {
-            passes = args
-                .next()
-                .and_then(|v| v.parse().ok())
-                .filter(|&p| p > 0)
-                .expect("--passes takes a positive number");
-        }
-    }
+    let passes = rt_benches::passes_flag(5);
     println!(
         "One-ray bundles against single-ray calls: primary rays of the filled view, {WIDTH}×{HEIGHT}, \
          one thread, median of {passes} interleaved passes; ms per pass and bundle ÷ single\n"

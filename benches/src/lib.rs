@@ -128,3 +128,21 @@ pub fn flag_values() -> Vec<(String, String)> {
     }
     out
 }
+
+/// The `--passes N` of a benchmark with its own harness (`default` without it).
+///
+/// # Panics
+/// If `N` is not a positive number.
+pub fn passes_flag(default: usize) -> usize {
+    flag_values()
+        .into_iter()
+        .rev()
+        .find(|(flag, _)| flag == "--passes")
+        .map(|(_, v)| {
+            v.parse()
+                .ok()
+                .filter(|&p: &usize| p > 0)
+                .expect("--passes takes a positive number")
+        })
+        .unwrap_or(default)
+}

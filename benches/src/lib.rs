@@ -76,7 +76,7 @@ fn builtin(name: &'static str) -> BenchScene {
 ///
 /// # Panics
 /// If the shared meshes are missing under `CI=true`, or the file does not load.
-fn shared(name: &'static str, file: &str) -> Option<BenchScene> {
+pub fn shared(name: &'static str, file: &str) -> Option<BenchScene> {
     let path = shared_meshes_dir()?.join(file);
     let mesh = rt_scene::load_obj(&path).unwrap_or_else(|e| panic!("{e}"));
     Some(BenchScene {

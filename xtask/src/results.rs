@@ -215,23 +215,30 @@ fn measure_all(args: &Args) -> Result<PathBuf, String> {
         page += &one_ray_bundles()?;
     }
 
-    page += "\n## Closest points\n\nThe primitive nearest to each point: half of the points \
-             anywhere in the scene box grown by a quarter on every side, half within 2% of its \
-             diagonal from the surface.\n";
-    let argv = [
-        "compare",
-        "--scene",
-        plan.real,
-        "--query",
-        "closest-point",
-        "--points",
-        plan.points,
-        "-s",
-        "bvh,kdtree,grid,hgrid,octree",
-        "--json",
-    ];
-    let run = measure(&argv)?;
-    shootout_table(&mut page, &run);
+    let closest = "\n## Closest points\n\nThe primitive nearest to each point: half of the points \
+                   anywhere in the scene box grown by a quarter on every side, half within 2% of \
+                   its diagonal from the surface.\n";
+    let signed = "\n## Signed distance\n\nThe same points' signed distance: each row's closest \
+                  point, signed by one winding tree every row shares (built once, outside the \
+                  rows' figures); brute force signs with the exact winding number over every \
+                  triangle. The share is of the points inside.\n";
+    for (query, section) in [("closest-point", closest), ("signed-distance", signed)] {
+        page += section;
+        let argv = [
+            "compare",
+            "--scene",
+            plan.real,
+            "--query",
+            query,
+            "--points",
+            plan.points,
+            "-s",
+            "bvh,kdtree,grid,hgrid,octree",
+            "--json",
+        ];
+        let run = measure(&argv)?;
+        shootout_table(&mut page, &run);
+    }
 
     page += "\n## Instances\n\nA field of instances of one mesh (each rotated, scaled unevenly, \
              every seventh mirrored) under rt-bvh's top-level BVH, each row's structure built \
@@ -382,14 +389,16 @@ fn f(v: &Value) -> f64 {
 /// speed and the speedup over brute force.
 fn shootout_table(page: &mut String, run: &Run) {
     let j = &run.json;
-    let points = j["query"] == "closest-point";
+    let signed = j["query"] == "signed-distance";
+    let points = j["query"] == "closest-point" || signed;
     let (unit, speed) = if points {
         ("query", "Mqueries/s")
     } else {
         ("ray", "Mrays/s")
     };
+    let verb = if signed { "are inside" } else { "hit" };
     let hits = j["hit_share"].as_f64().map_or(String::new(), |h| {
-        format!(", {:.1}% of them hit", 100.0 * h)
+        format!(", {:.1}% of them {verb}", 100.0 * h)
     });
     let _ = writeln!(
         page,
@@ -398,7 +407,9 @@ fn shootout_table(page: &mut String, run: &Run) {
         j["scene"].as_str().unwrap_or("?"),
         j["triangles"],
         j["rays"],
-        if points {
+        if signed {
+            "signed-distance queries".to_owned()
+        } else if points {
             "closest-point queries".to_owned()
         } else {
             format!("{} rays", j["ray_kind"].as_str().unwrap_or("?"))

@@ -682,6 +682,49 @@ fn all_hits_and_filtered_hits_agree_with_brute_force_on_every_shared_mesh() {
 }
 
 #[test]
+fn signed_distances_agree_with_brute_force_on_every_shared_mesh() {
+    let Some(meshes) = shared_obj_meshes() else {
+        return;
+    };
+    for mesh in &meshes {
+        let v = json(&compare(&[
+            "--scene",
+            mesh.to_str().unwrap(),
+            "--query",
+            "signed-distance",
+            "--points",
+            "600",
+            "--structures",
+            "bvh,kdtree,grid,hgrid,octree",
+            "--check-rays",
+            "600",
+            "--repeats",
+            "0",
+            "--json",
+        ]));
+        assert_eq!(v["query"], "signed-distance");
+        assert_eq!(v["checked_rays"], 600, "{}", mesh.display());
+        let rows = v["results"].as_array().unwrap();
+        assert_eq!(rows.len(), 6);
+        for r in rows {
+            assert_eq!(r["mismatches"], 0, "{}: {r}", mesh.display());
+        }
+        // Points inside and outside, or the sign is not checked; the two flat meshes (every
+        // z is 0) enclose nothing, and their winding numbers stay at most ½.
+        let share = v["hit_share"].as_f64().unwrap();
+        let flat = ["alligator.obj", "woody.obj"]
+            .iter()
+            .any(|f| mesh.ends_with(f));
+        if flat {
+            assert_eq!(share, 0.0, "{}", mesh.display());
+        } else {
+            assert!(share > 0.02 && share < 0.98, "{}: {share}", mesh.display());
+        }
+        assert!(v["note"].as_str().unwrap().contains("winding tree"), "{v}");
+    }
+}
+
+#[test]
 fn closest_point_options_reject_bad_values_in_one_line() {
     assert_one_line_error(
         &compare(&["--query", "closest-point", "--points", "0"]),

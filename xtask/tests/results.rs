@@ -22,6 +22,7 @@ fn the_quick_page_has_every_section_and_its_commands() {
         "## One thread",
         "## Ray bundles",
         "## Closest points",
+        "## Signed distance",
         "## Instances",
         "## Scale",
         "## Dynamic scenes",
@@ -32,11 +33,12 @@ fn the_quick_page_has_every_section_and_its_commands() {
     let commands = text.matches("`cargo xtask ").count() - 1; // less the stamp's own
     let tables = text.matches("\n| --- |").count() + text.matches("\n| ---: |").count();
     assert!(
-        commands >= tables && tables >= 9,
+        commands >= tables && tables >= 10,
         "{commands} commands, {tables} tables:\n{text}"
     );
     assert!(text.contains("| bvh | "), "{text}");
     assert!(text.contains("% of them hit"), "{text}");
+    assert!(text.contains("% of them are inside"), "{text}");
     // The bundle table ends with each ray kind's geometric mean.
     for kind in ["primary", "shadow", "incoherent"] {
         assert!(

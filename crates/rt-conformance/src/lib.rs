@@ -20,8 +20,11 @@
 //! primitives, with and without a maximum distance), the same primitive and a distance within a
 //! relative 1e-5 ([`PointHit::agree`]); for every box overlap query ([`scene_boxes`]: boxes
 //! that touch primitives, flat and point boxes on their vertices' planes, boxes at random, and
-//! boxes that meet nothing), the same list of primitives ([`compare_boxes`]); the answer must
-//! not change when statistics are counted;
+//! boxes that meet nothing), the same list of primitives ([`compare_boxes`]); for all hits,
+//! hit counts and filtered queries, the hits of the primitives tested one by one
+//! ([`compare_hits`]); for signed distance and crossing parity at up to 64 of those points, brute
+//! force's closest point with the exact winding number's sign, and brute force's parity
+//! ([`compare_inside`]); the answer must not change when statistics are counted;
 //! and the structure must report the number of valid primitives it kept. The bundle queries
 //! ([`Accel::intersect_bundle`], [`Accel::occluded_bundle`]) must give, ray for ray, the same
 //! bits as the single queries, whatever bundles the rays come in ([`compare_bundles`]).
@@ -50,6 +53,7 @@ pub use rt_core;
 mod boxes;
 mod bundles;
 mod hits;
+mod inside;
 mod instances;
 mod refit;
 pub use boxes::{BoxMismatch, compare_boxes, scene_boxes};
@@ -58,6 +62,7 @@ pub use bundles::{
     compare_bundles, same_bits,
 };
 pub use hits::{FILTERS, Filter, HitsMismatch, compare_hits, hits_one_by_one};
+pub use inside::{InsideMismatch, SIGN_MARGIN, compare_inside};
 pub use instances::{
     BottomBuilder, InstancedCase, Placement, TWO_LEVEL_SCENES, check_two_level_case,
     check_two_level_random, check_two_level_scene, two_level_scene,
@@ -490,6 +495,10 @@ fn check_queries<A: Accel + 'static>(
             let some: Vec<Ray> = rays.iter().step_by(stride).copied().collect();
             hits::compare_hits_probed(&accel, &prims, &some, probe)
                 .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
+            // Parity counts crossings with `count_hits`, checked just above.
+            let near = inside::some_points(&points);
+            inside::compare_inside_probed(&accel, &reference, &prims, &near, probe)
+                .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
         }
         Ok(())
     })
@@ -521,6 +530,7 @@ enum Doing {
     Tracing(Ray),
     Bundle(Ray, usize),
     Point(Vec3, f32),
+    Inside(Vec3, f32),
     Box(rt_core::Aabb),
 }
 
@@ -563,6 +573,10 @@ impl Probe {
             ),
             Ok(Doing::Point(p, max)) => format!(
                 "closest_point(Vec3::new({:?}, {:?}, {:?}), {max:?})",
+                p.x, p.y, p.z
+            ),
+            Ok(Doing::Inside(p, max)) => format!(
+                "signed_distance and inside_by_parity at Vec3::new({:?}, {:?}, {:?}) within {max:?}",
                 p.x, p.y, p.z
             ),
         }
@@ -693,6 +707,7 @@ pub const SCENES: &[&str] = &[
     "spanning_triangles",
     "invalid_rays",
     "lattice",
+    "closed_meshes",
 ];
 
 /// The adversarial scene called `name` (one of [`SCENES`]).
@@ -720,6 +735,7 @@ pub fn scene(name: &str) -> Scene {
         "invalid_rays" => invalid_rays(),
         "exponential_chain" => exponential_chain(),
         "far_origins" => far_origins(),
+        "closed_meshes" => closed_meshes(),
         "lattice" => Scene {
             triangles: lattice_triangles(1, 60),
             rays: lattice_rays(1, 800),
@@ -1161,7 +1177,7 @@ macro_rules! conformance_tests {
             empty_scene one_triangle shared_edge identical_triangles equal_centroids
             zero_area_triangles axis_parallel_rays rays_in_box_faces origins_inside
             large_coordinates nan_vertex exponential_chain far_origins planar_triangles
-            spanning_triangles invalid_rays lattice);
+            spanning_triangles invalid_rays lattice closed_meshes);
     };
     (@each $check:ident, $accel:ty; $($scene:ident)*) => {
         $(
@@ -1210,6 +1226,84 @@ fn soup(rng: &mut Rng, n: usize, lo: Vec3, hi: Vec3, size: f32) -> Vec<Triangle>
             )
         })
         .collect()
+}
+
+/// The twelve triangles of the box `[lo, hi]`, facing outwards (inwards with `inwards`).
+fn box_triangles(lo: Vec3, hi: Vec3, inwards: bool) -> Vec<Triangle> {
+    let corner = |i: usize| {
+        Vec3::new(
+            if i & 1 == 0 { lo.x } else { hi.x },
+            if i & 2 == 0 { lo.y } else { hi.y },
+            if i & 4 == 0 { lo.z } else { hi.z },
+        )
+    };
+    // Each face as four corners counter-clockwise seen from outside.
+    let faces = [
+        [0, 2, 3, 1],
+        [4, 5, 7, 6],
+        [0, 1, 5, 4],
+        [2, 6, 7, 3],
+        [0, 4, 6, 2],
+        [1, 3, 7, 5],
+    ];
+    let mut tris = Vec::new();
+    for [a, b, c, d] in faces {
+        let (a, b, c, d) = (corner(a), corner(b), corner(c), corner(d));
+        if inwards {
+            tris.extend([Triangle::new(a, c, b), Triangle::new(a, d, c)]);
+        } else {
+            tris.extend([Triangle::new(a, b, c), Triangle::new(a, c, d)]);
+        }
+    }
+    tris
+}
+
+/// Closed meshes, where inside and outside mean something: a box with a box-shaped cavity
+/// (its faces turned inwards) and a UV sphere whose pole fans hold zero-area triangles. Rays
+/// start inside and outside and run through the shared edges and vertices, along the faces
+/// and at random.
+fn closed_meshes() -> Scene {
+    let mut rng = Rng::new(18);
+    let mut triangles = box_triangles(Vec3::splat(-1.0), Vec3::ONE, false);
+    triangles.extend(box_triangles(Vec3::splat(-0.4), Vec3::splat(0.4), true));
+    let (centre, radius, rings, segments) = (Vec3::new(3.0, 0.0, 0.0), 0.75, 6, 12);
+    let at = |i: usize, j: usize| {
+        let theta = std::f32::consts::PI * i as f32 / rings as f32;
+        let phi = std::f32::consts::TAU * (j % segments) as f32 / segments as f32;
+        centre
+            + radius
+                * Vec3::new(
+                    theta.sin() * phi.cos(),
+                    theta.sin() * phi.sin(),
+                    theta.cos(),
+                )
+    };
+    for i in 0..rings {
+        for j in 0..segments {
+            let (a, b, c, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
+            triangles.extend([Triangle::new(a, b, c), Triangle::new(a, c, d)]);
+        }
+    }
+    let (lo, hi) = (Vec3::new(-1.5, -1.5, -1.5), Vec3::new(4.0, 1.5, 1.5));
+    let mut rays = random_rays(&mut rng, lo, hi, 200);
+    rays.extend(aimed_rays(&mut rng, &triangles, lo, hi, 200));
+    // From inside the box and the cavity, through every vertex of the outer box and the middle
+    // of its edges, and along the axes through its edges.
+    for o in [
+        Vec3::new(0.7, 0.1, -0.2),
+        Vec3::new(0.1, -0.2, 0.05),
+        Vec3::new(3.1, 0.2, 0.1),
+    ] {
+        for t in triangles.iter().take(12) {
+            rays.push(Ray::new(o, t.v0 - o));
+            rays.push(Ray::new(o, (t.v1 + t.v2) * 0.5 - o));
+        }
+    }
+    for axis in [Vec3::X, Vec3::Y, Vec3::Z] {
+        rays.push(Ray::new(Vec3::new(1.0, 1.0, 1.0) - axis * 3.0, axis));
+        rays.push(Ray::new(Vec3::new(-1.0, 1.0, -1.0) - axis * 3.0, axis));
+    }
+    Scene { triangles, rays }
 }
 
 fn one_triangle() -> Scene {

@@ -2,7 +2,8 @@
 
 use crate::{
     Aabb, AllHits, AnyHit, BallQuery, BoxQuery, ClosestHit, ClosestPointQuery, CountHits, Filtered,
-    Geometry, NoStats, OverlapQuery, PointHit, PrimHit, Primitive, Ray, RayQuery, Stats,
+    Geometry, NoStats, OverlapQuery, PointHit, PrimHit, Primitive, Ray, RayQuery, SignedPoint,
+    Stats, WindingTree,
 };
 use glam::Vec3;
 use std::fmt::Debug;
@@ -372,6 +373,77 @@ pub trait Accel: Sized + Send + Sync {
     #[inline]
     fn closest_point(&self, point: Vec3, max_distance: f32) -> Option<PointHit> {
         self.closest_point_with(point, max_distance, &mut NoStats)
+    }
+
+    /// The distance from `point` to the nearest primitive no farther than `max_distance`,
+    /// negative when `point` is inside the mesh by `sign`'s winding number
+    /// ([`WindingTree::is_inside`]), reporting the closest-point walk's events to `stats`.
+    ///
+    /// `sign` must be built over the primitives this structure was built from. `None` when
+    /// nothing lies that near, and for an invalid query (see [`ClosestPointQuery::new`]). See
+    /// the [`winding`](crate::winding) module.
+    #[inline]
+    fn signed_distance_with<S: Stats>(
+        &self,
+        sign: &WindingTree,
+        point: Vec3,
+        max_distance: f32,
+        stats: &mut S,
+    ) -> Option<SignedPoint> {
+        let near = self.closest_point_with(point, max_distance, stats)?;
+        Some(SignedPoint::signed(near, sign.is_inside(point)))
+    }
+
+    /// The signed distance from `point`: see
+    /// [`signed_distance_with`](Accel::signed_distance_with).
+    #[inline]
+    fn signed_distance(
+        &self,
+        sign: &WindingTree,
+        point: Vec3,
+        max_distance: f32,
+    ) -> Option<SignedPoint> {
+        self.signed_distance_with(sign, point, max_distance, &mut NoStats)
+    }
+
+    /// Whether `point` is inside by counting crossings: a ray from `point` that crosses the
+    /// surface an odd number of times ([`count_hits`](Accel::count_hits)) starts inside, and
+    /// the majority of three rays in fixed directions (not along any axis) decides.
+    ///
+    /// The simple alternative to the winding number ([`WindingTree::is_inside`]), and with no
+    /// tree to build: right for a closed mesh, except that a ray through a shared edge or
+    /// vertex may count the crossing on both triangles, which the vote outweighs only when the
+    /// other two rays are clean. A mesh with holes answers by where the rays happen to leave.
+    /// A point with a non-finite coordinate is outside.
+    ///
+    /// ```
+    /// use rt_core::{Accel, BruteForce, Triangle, glam::Vec3};
+    /// let p = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z];
+    /// let tetrahedron = [
+    ///     Triangle::new(p[0], p[2], p[1]),
+    ///     Triangle::new(p[0], p[1], p[3]),
+    ///     Triangle::new(p[0], p[3], p[2]),
+    ///     Triangle::new(p[1], p[2], p[3]),
+    /// ];
+    /// let accel = BruteForce::build(&tetrahedron, &());
+    /// assert!(accel.inside_by_parity(Vec3::splat(0.2)));
+    /// assert!(!accel.inside_by_parity(Vec3::splat(0.5)));
+    /// ```
+    fn inside_by_parity(&self, point: Vec3) -> bool {
+        // Three unit vectors with exact f32 coordinates, pairwise perpendicular.
+        const DIRECTIONS: [Vec3; 3] = [
+            Vec3::new(0.6, 0.48, 0.64),
+            Vec3::new(-0.48, 0.64, -0.6),
+            Vec3::new(0.64, -0.6, -0.48),
+        ];
+        if !point.is_finite() {
+            return false;
+        }
+        let odd = DIRECTIONS
+            .iter()
+            .filter(|&&d| self.count_hits(&Ray::new(point, d)) % 2 == 1)
+            .count();
+        odd >= 2
     }
 
     /// Offers `query` every valid primitive that may meet its box: the one traversal behind box

@@ -4,7 +4,7 @@ use crate::query::{AllHits, AnyHit, ClosestHit, Filtered, RayOfBox, RayQuery};
 use crate::trace::Trace;
 use crate::{
     Aabb, Accel, BallQuery, BoxQuery, BuildStats, Counters, Hit, NoStats, PointHit, PrimHit,
-    Primitive, Ray, Region,
+    Primitive, Ray, Region, SignedPoint, WindingTree,
 };
 use glam::Vec3;
 
@@ -139,6 +139,23 @@ pub trait DynAccel<P>: Send + Sync {
         out: &mut [Option<PointHit>],
         counters: Option<&mut Counters>,
     );
+    /// [`Accel::signed_distance`] for each `(point, max_distance)` into the same slot of `out`
+    /// (as many as both have), the closest-point walks counted into `counters` if given. The
+    /// default, for wrappers, signs [`closest_points_all`](DynAccel::closest_points_all)'s
+    /// answers with [`WindingTree::is_inside`].
+    fn signed_distances_all(
+        &self,
+        sign: &WindingTree,
+        points: &[(Vec3, f32)],
+        out: &mut [Option<SignedPoint>],
+        counters: Option<&mut Counters>,
+    ) {
+        let mut near = vec![None; points.len().min(out.len())];
+        self.closest_points_all(points, &mut near, counters);
+        for ((o, &(p, _)), near) in out.iter_mut().zip(points).zip(near) {
+            *o = near.map(|near| SignedPoint::signed(near, sign.is_inside(p)));
+        }
+    }
 }
 
 /// A ray query through a structure's box query: [`Accel::ray_query`]'s default, for a
@@ -321,6 +338,22 @@ impl<A: Accel> DynAccel<A::Prim> for A {
         match counters {
             Some(c) => pairs.for_each(|(o, &(p, max))| *o = self.closest_point_with(p, max, c)),
             None => pairs.for_each(|(o, &(p, max))| *o = self.closest_point(p, max)),
+        }
+    }
+
+    fn signed_distances_all(
+        &self,
+        sign: &WindingTree,
+        points: &[(Vec3, f32)],
+        out: &mut [Option<SignedPoint>],
+        counters: Option<&mut Counters>,
+    ) {
+        let pairs = out.iter_mut().zip(points);
+        match counters {
+            Some(c) => pairs.for_each(|(o, &(p, max))| {
+                *o = self.signed_distance_with(sign, p, max, c);
+            }),
+            None => pairs.for_each(|(o, &(p, max))| *o = self.signed_distance(sign, p, max)),
         }
     }
 }

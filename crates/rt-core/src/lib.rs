@@ -1,6 +1,7 @@
 //! The contract of the `rt-accel` structures: rays, boxes, primitives, the [`Accel`] trait every
 //! acceleration structure implements, traversal [`Stats`], the [`BruteForce`] reference,
-//! geometry sources, closest points and instancing. It depends on glam and bytemuck only.
+//! geometry sources, closest points, the winding number and signed distance, and instancing. It
+//! depends on glam and bytemuck only.
 //!
 //! Around it: `rt-scene` loads meshes (OBJ, PLY, glTF), makes procedural scenes and has the
 //! camera; `rt-conformance` is the kit that checks any structure (yours too) against brute
@@ -51,6 +52,13 @@
 //! clipped to the box, not judged by its bounding box), and [`Accel::overlaps_any`]
 //! stops at the first. Structures implement one traversal, [`Accel::box_query`], over a
 //! [`BoxQuery`] that may end the walk; [`OverlapQuery`] is the standard one.
+//!
+//! # Inside, outside and signed distance
+//! [`WindingTree`] answers whether a point is inside a triangle mesh by its generalised
+//! winding number, robust to holes and cracks, fast through Barill et al.'s cluster expansion
+//! with a stated error bound; [`Accel::signed_distance`] puts that sign on the closest-point
+//! distance, and [`Accel::inside_by_parity`] is the simple alternative that counts the
+//! crossings of rays. See the [`winding`] module.
 //!
 //! # Instances
 //! A two-level scene places built structures (any [`Accel`], behind [`DynAccel`], kinds mixed) with
@@ -108,6 +116,7 @@ mod stats;
 mod surface;
 pub mod trace;
 mod triangle;
+pub mod winding;
 
 pub use aabb::{Aabb, NEAR_TIE, SLAB_FAR_SCALE};
 pub use accel::{Accel, BuildStats, Hit, Region, ValidationError};
@@ -141,6 +150,9 @@ pub use stats::{Counters, NoStats, Stats};
 pub use surface::{OFFSET_ULPS, SurfacePoint, error_bound, offset_origin};
 pub use trace::{Event, Outcome, Place, Take, Trace};
 pub use triangle::{MtTriangle, Shear, Triangle, moller_trumbore_edges};
+pub use winding::{
+    NotATriangle, SignedPoint, Winding, WindingTree, solid_angle, winding_number_exact,
+};
 
 /// Re-exported so users name the same `Vec3` the library uses.
 pub use glam;

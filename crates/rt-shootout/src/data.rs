@@ -113,6 +113,9 @@ pub struct Report {
     /// Closest-point or box queries on which a row disagreed with brute force (the first few).
     pub query_disagreements: Vec<points::QueryDisagreement>,
     pub per_ray_answers: bool,
+    /// A sentence the table prints under its header, such as what the rows share beyond their
+    /// structures (empty if none).
+    pub note: String,
 }
 
 impl Report {
@@ -125,7 +128,7 @@ impl Report {
     }
 
     /// The share of the rays that hit the scene (any-hit rays: that are occluded; box queries:
-    /// that meet a primitive), from the first row that traced them all (brute force traces only
+    /// that meet a primitive; signed distance: points inside), from the first row that traced them all (brute force traces only
     /// the checked ones); `None` for closest-point queries or when no row traced. A view where most rays miss times
     /// little but the call, so the share belongs beside every speed.
     pub fn hit_share(&self) -> Option<f64> {

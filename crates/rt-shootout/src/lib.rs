@@ -208,6 +208,8 @@ mod guide {
     struct ClosestPoints;
     #[doc = include_str!("../../../docs/overlap.md")]
     struct Overlap;
+    #[doc = include_str!("../../../docs/inside-outside.md")]
+    struct InsideOutside;
     #[doc = include_str!("../../../docs/ray-queries.md")]
     struct RayQueries;
     #[doc = include_str!("../../../docs/instances.md")]

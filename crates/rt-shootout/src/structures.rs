@@ -12,8 +12,8 @@ use rt_bvh::Bvh;
 use rt_core::glam::Vec3;
 use rt_core::{
     Aabb, Accel, BallQuery, BruteForce, BuildStats, Counters, DynAccel, Hit, Instance, NoStats,
-    OverlapQuery, PointHit, PrimHit, Ray, Refit, RefitError, Region, Shape, Stats, Trace, Triangle,
-    TwoLevel,
+    OverlapQuery, PointHit, PrimHit, Ray, Refit, RefitError, Region, Shape, SignedPoint, Stats,
+    Trace, Triangle, TwoLevel, WindingTree, winding_number_exact,
 };
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
@@ -180,6 +180,54 @@ pub fn closest_counted(
 ) -> (Vec<Option<PointHit>>, Counters) {
     counted_chunks(points, |points, out, c| {
         s.closest_points_all(points, out, Some(c))
+    })
+}
+
+/// The signed distance for every `(point, maximum distance)`, signed by `sign`, with the
+/// counters of the closest-point walks, in parallel chunks.
+pub fn signed_counted(
+    s: &dyn DynAccel<Triangle>,
+    sign: &WindingTree,
+    points: &[(Vec3, f32)],
+) -> (Vec<Option<SignedPoint>>, Counters) {
+    counted_chunks(points, |points, out, c| {
+        s.signed_distances_all(sign, points, out, Some(c))
+    })
+}
+
+/// The signed distances without counters; returns how many points are inside. The timed pass.
+pub fn signed_timed(
+    s: &dyn DynAccel<Triangle>,
+    sign: &WindingTree,
+    points: &[(Vec3, f32)],
+) -> usize {
+    points
+        .par_chunks(CHUNK)
+        .map(|points| {
+            let mut out = [None; CHUNK];
+            let out = &mut out[..points.len()];
+            s.signed_distances_all(sign, points, out, None);
+            out.iter().flatten().filter(|h| h.inside).count()
+        })
+        .sum()
+}
+
+/// Brute force's signed distances, the reference: brute force's closest points, signed by the
+/// exact winding number of `tris` (every triangle's solid angle, [`winding_number_exact`]) and
+/// not by the tree the rows use.
+pub fn signed_exact(
+    s: &dyn DynAccel<Triangle>,
+    tris: &[Triangle],
+    points: &[(Vec3, f32)],
+) -> (Vec<Option<SignedPoint>>, Counters) {
+    counted_chunks(points, |points, out, c| {
+        let mut near = [None; CHUNK];
+        let near = &mut near[..points.len()];
+        s.closest_points_all(points, near, Some(c));
+        for ((o, &(p, _)), near) in out.iter_mut().zip(points).zip(near.iter()) {
+            let inside = winding_number_exact(tris, p).is_ok_and(|w| w > 0.5);
+            *o = near.map(|near| SignedPoint::signed(near, inside));
+        }
     })
 }
 

@@ -851,3 +851,71 @@ fn ray_queries_that_repeat_a_hit_go_on_after_a_stop_or_drop_the_filter_fail_the_
         "intersect_filtered disagrees",
     );
 }
+
+#[test]
+fn the_closed_meshes_scene_winds_once_in_the_walls_and_the_ball_and_never_in_the_cavity() {
+    let s = scene("closed_meshes");
+    let w = |p: Vec3| rt_core::winding_number_exact(&s.triangles, p).unwrap();
+    for (p, expected) in [
+        (Vec3::new(0.7, 0.1, -0.2), 1.0),
+        (Vec3::new(3.1, 0.2, 0.1), 1.0),
+        (Vec3::new(0.1, -0.2, 0.05), 0.0),
+        (Vec3::new(2.0, 0.0, 0.0), 0.0),
+    ] {
+        assert!((w(p) - expected).abs() < 1e-9, "{p}: {}", w(p));
+    }
+}
+
+/// Brute force whose signed distance is wrong on purpose: never inside (`MODE` 0), or whose
+/// crossing parity is (1).
+struct SignWrong<const MODE: u8>(BruteForce<Triangle>);
+
+impl<const MODE: u8> Accel for SignWrong<MODE> {
+    forward_to_brute_force!();
+    const NAME: &'static str = "sign-wrong";
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        self.0.intersect_with(ray, stats)
+    }
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        self.0.ray_query(ray, query, stats);
+    }
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.ball_query(query, stats);
+    }
+    fn box_query<Q: BoxQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.box_query(query, stats);
+    }
+    fn signed_distance_with<S: Stats>(
+        &self,
+        sign: &rt_core::WindingTree,
+        point: Vec3,
+        max_distance: f32,
+        stats: &mut S,
+    ) -> Option<rt_core::SignedPoint> {
+        let mut s = self
+            .0
+            .signed_distance_with(sign, point, max_distance, stats)?;
+        if MODE == 0 {
+            s.inside = false;
+            s.distance = s.near.distance;
+        }
+        Some(s)
+    }
+    fn inside_by_parity(&self, point: Vec3) -> bool {
+        self.0.inside_by_parity(point) != (MODE == 1)
+    }
+}
+
+#[test]
+fn a_signed_distance_without_its_sign_or_a_wrong_parity_fails_the_kit() {
+    let s = scene("closed_meshes");
+    let e = check_case_within::<SignWrong<0>>(&(), &s.triangles, &s.rays, STALL_LIMIT)
+        .expect_err("a signed distance that never says inside must be caught");
+    assert!(
+        e.contains("signed_distance disagrees with brute force") && e.contains("point:"),
+        "{e}"
+    );
+    let e = check_case_within::<SignWrong<1>>(&(), &s.triangles, &s.rays, STALL_LIMIT)
+        .expect_err("a wrong crossing parity must be caught");
+    assert!(e.contains("inside_by_parity disagrees"), "{e}");
+}

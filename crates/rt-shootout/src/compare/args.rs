@@ -21,6 +21,9 @@ pub enum QueryKind {
     /// Closest and any hits through an alpha mask: a checkerboard over each triangle's
     /// barycentric coordinates cuts away half of every triangle (`--rays` says which rays).
     Filtered,
+    /// Signed distances at `--points` points: each row's closest point, negative inside by
+    /// the fast winding number of a tree every row shares; brute force signs by the exact sum.
+    SignedDistance,
 }
 
 impl QueryKind {
@@ -32,6 +35,7 @@ impl QueryKind {
             QueryKind::Overlap => "overlap",
             QueryKind::AllHits => "all-hits",
             QueryKind::Filtered => "filtered",
+            QueryKind::SignedDistance => "signed-distance",
         }
     }
 }

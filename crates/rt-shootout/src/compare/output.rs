@@ -15,12 +15,14 @@ pub fn to_table(r: &Report) -> String {
         points::OVERLAP_KIND => ("query", "box overlap queries"),
         points::ALL_HITS_KIND => ("ray", "all-hits queries"),
         points::FILTERED_KIND => ("ray", "filtered queries (alpha mask)"),
+        points::SIGNED_KIND => ("query", "signed-distance queries"),
         _ => ("ray", "rays"),
     };
     if points::is_query_kind(r.ray_kind) {
-        let (on, verb) = match r.view {
-            "" => (String::new(), "meet the mesh"),
-            rays => (format!(" on {rays}"), "hit"),
+        let (on, verb) = match (r.view, r.ray_kind) {
+            ("", points::SIGNED_KIND) => (String::new(), "inside"),
+            ("", _) => (String::new(), "meet the mesh"),
+            (rays, _) => (format!(" on {rays}"), "hit"),
         };
         let met = r
             .hit_share()
@@ -44,6 +46,9 @@ pub fn to_table(r: &Report) -> String {
             "scene {} ({} triangles, {} valid), {} {} rays{view}{hits}, {} threads; {} rays checked against brute force",
             r.scene, r.triangles, r.valid_triangles, r.rays, r.ray_kind, r.threads, r.checked_rays
         );
+    }
+    if !r.note.is_empty() {
+        let _ = writeln!(s, "{}", r.note);
     }
     let _ = writeln!(
         s,
@@ -287,6 +292,7 @@ pub(super) fn to_json(r: &Report) -> String {
         "hit_share": r.hit_share(),
         "threads": r.threads,
         "checked_rays": r.checked_rays,
+        "note": r.note,
         "results": results,
     })
     .to_string()

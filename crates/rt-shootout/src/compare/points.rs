@@ -1,4 +1,5 @@
-//! `compare --query closest-point`, `overlap`, `all-hits` and `filtered`: the shootout for
+//! `compare --query closest-point`, `overlap`, `all-hits`, `filtered` and `signed-distance`: the
+//! shootout for
 //! queries beyond the closest and any hit.
 //!
 //! Every row answers the same queries: closest points to [`raygen::query_points`], the
@@ -12,7 +13,10 @@ use super::run::make_rays;
 use super::{Args, Report, Row, Source, build_fastest, checked_subset};
 use crate::structures;
 use rt_core::glam::Vec3;
-use rt_core::{Aabb, Counters, DynAccel, Hit, PointHit, PrimHit, Primitive, Ray, Rng, Triangle};
+use rt_core::{
+    Aabb, Counters, DynAccel, Hit, PointHit, PrimHit, Primitive, Ray, Rng, SignedPoint, Triangle,
+    WindingTree,
+};
 use rt_scene::raygen;
 use std::fmt::Debug;
 use std::time::{Duration, Instant};
@@ -29,9 +33,19 @@ pub const ALL_HITS_KIND: &str = "all-hits";
 /// The report's `ray_kind` for filtered queries.
 pub const FILTERED_KIND: &str = "filtered";
 
+/// The report's `ray_kind` for signed-distance queries.
+pub const SIGNED_KIND: &str = "signed-distance";
+
 /// Whether a report holds queries other than closest and any hits.
 pub fn is_query_kind(kind: &str) -> bool {
-    [KIND, OVERLAP_KIND, ALL_HITS_KIND, FILTERED_KIND].contains(&kind)
+    [
+        KIND,
+        OVERLAP_KIND,
+        ALL_HITS_KIND,
+        FILTERED_KIND,
+        SIGNED_KIND,
+    ]
+    .contains(&kind)
 }
 
 /// The alpha mask of `compare --query filtered`: a checkerboard of 8 × 8 squares over each
@@ -57,13 +71,31 @@ pub struct QueryDisagreement {
 trait Queries {
     type Query: Copy + Send + Sync;
     type Answer: Clone + Debug + Send + Sync;
+    /// What every row's queries share beyond the structure, made once per scene: nothing, or
+    /// for signed distance the winding tree and the triangles.
+    type Context: Sync;
     const KIND: &'static str;
     /// The queries the rows answer, and the view they come from (empty if none).
     fn queries(args: &Args, source: &Source) -> Result<(Vec<Self::Query>, &'static str), String>;
+    /// The shared context, and a sentence on what it took to make (empty if nothing).
+    fn context(source: &Source) -> (Self::Context, String);
     /// Every answer, counted.
-    fn counted(s: &dyn DynAccel<Triangle>, q: &[Self::Query]) -> (Vec<Self::Answer>, Counters);
+    fn counted(
+        s: &dyn DynAccel<Triangle>,
+        c: &Self::Context,
+        q: &[Self::Query],
+    ) -> (Vec<Self::Answer>, Counters);
     /// How many queries found something, uncounted: the timed pass.
-    fn timed(s: &dyn DynAccel<Triangle>, q: &[Self::Query]) -> usize;
+    fn timed(s: &dyn DynAccel<Triangle>, c: &Self::Context, q: &[Self::Query]) -> usize;
+    /// Brute force's answers, which every row is checked against: by default
+    /// [`counted`](Queries::counted) on brute force.
+    fn reference(
+        s: &dyn DynAccel<Triangle>,
+        c: &Self::Context,
+        q: &[Self::Query],
+    ) -> (Vec<Self::Answer>, Counters) {
+        Self::counted(s, c, q)
+    }
     fn found(a: &Self::Answer) -> bool;
     fn agree(a: &Self::Answer, b: &Self::Answer) -> bool;
     fn rust(q: &Self::Query) -> String;
@@ -75,6 +107,7 @@ struct ClosestPoints;
 impl Queries for ClosestPoints {
     type Query = (Vec3, f32);
     type Answer = Option<PointHit>;
+    type Context = ();
     const KIND: &'static str = KIND;
     fn queries(args: &Args, source: &Source) -> Result<(Vec<(Vec3, f32)>, &'static str), String> {
         let max = args.max_distance.unwrap_or(f32::INFINITY);
@@ -84,10 +117,17 @@ impl Queries for ClosestPoints {
         let points = raygen::query_points(&source.mesh, &source.bounds, args.points, args.seed);
         Ok((points.into_iter().map(|p| (p, max)).collect(), ""))
     }
-    fn counted(s: &dyn DynAccel<Triangle>, q: &[(Vec3, f32)]) -> (Vec<Option<PointHit>>, Counters) {
+    fn context(_: &Source) -> ((), String) {
+        ((), String::new())
+    }
+    fn counted(
+        s: &dyn DynAccel<Triangle>,
+        _: &(),
+        q: &[(Vec3, f32)],
+    ) -> (Vec<Option<PointHit>>, Counters) {
         structures::closest_counted(s, q)
     }
-    fn timed(s: &dyn DynAccel<Triangle>, q: &[(Vec3, f32)]) -> usize {
+    fn timed(s: &dyn DynAccel<Triangle>, _: &(), q: &[(Vec3, f32)]) -> usize {
         structures::closest_timed(s, q)
     }
     fn found(a: &Option<PointHit>) -> bool {
@@ -110,6 +150,7 @@ struct Overlaps;
 impl Queries for Overlaps {
     type Query = Aabb;
     type Answer = Vec<u32>;
+    type Context = ();
     const KIND: &'static str = OVERLAP_KIND;
     fn queries(args: &Args, source: &Source) -> Result<(Vec<Aabb>, &'static str), String> {
         let size = args.box_size;
@@ -121,10 +162,13 @@ impl Queries for Overlaps {
         let boxes = overlap_boxes(&source.mesh, &source.bounds, args.points, size, args.seed);
         Ok((boxes, ""))
     }
-    fn counted(s: &dyn DynAccel<Triangle>, q: &[Aabb]) -> (Vec<Vec<u32>>, Counters) {
+    fn context(_: &Source) -> ((), String) {
+        ((), String::new())
+    }
+    fn counted(s: &dyn DynAccel<Triangle>, _: &(), q: &[Aabb]) -> (Vec<Vec<u32>>, Counters) {
         structures::overlap_counted(s, q)
     }
-    fn timed(s: &dyn DynAccel<Triangle>, q: &[Aabb]) -> usize {
+    fn timed(s: &dyn DynAccel<Triangle>, _: &(), q: &[Aabb]) -> usize {
         structures::overlap_timed(s, q)
     }
     fn found(a: &Vec<u32>) -> bool {
@@ -137,6 +181,64 @@ impl Queries for Overlaps {
         format!(
             "overlapping(&Aabb::new(Vec3::new({:?}, {:?}, {:?}), Vec3::new({:?}, {:?}, {:?})))",
             b.min.x, b.min.y, b.min.z, b.max.x, b.max.y, b.max.z
+        )
+    }
+}
+
+/// Signed distances ([`Accel::signed_distance`](rt_core::Accel::signed_distance)) at the
+/// closest-point queries' points: every row signs its closest point with one shared
+/// [`WindingTree`]; brute force signs its own with the exact winding number.
+struct SignedDistances;
+
+impl Queries for SignedDistances {
+    type Query = (Vec3, f32);
+    type Answer = Option<SignedPoint>;
+    type Context = (WindingTree, std::sync::Arc<[Triangle]>);
+    const KIND: &'static str = SIGNED_KIND;
+    fn queries(args: &Args, source: &Source) -> Result<(Vec<(Vec3, f32)>, &'static str), String> {
+        ClosestPoints::queries(args, source)
+    }
+    fn context(source: &Source) -> (Self::Context, String) {
+        let t = Instant::now();
+        // Triangles are all the mesh holds, so the tree always builds.
+        let tree = WindingTree::build(&source.mesh)
+            .unwrap_or_else(|_| WindingTree::build::<Triangle>(&[]).expect("an empty tree builds"));
+        let note = format!(
+            "Every row signs with one winding tree (built in {:.1} ms, {:.2} MiB, not in the rows' \
+             figures); brute force signs with the exact sum over every triangle.",
+            t.elapsed().as_secs_f64() * 1e3,
+            tree.memory_bytes() as f64 / (1024.0 * 1024.0)
+        );
+        ((tree, source.mesh.clone()), note)
+    }
+    fn counted(
+        s: &dyn DynAccel<Triangle>,
+        (tree, _): &Self::Context,
+        q: &[(Vec3, f32)],
+    ) -> (Vec<Option<SignedPoint>>, Counters) {
+        structures::signed_counted(s, tree, q)
+    }
+    fn timed(s: &dyn DynAccel<Triangle>, (tree, _): &Self::Context, q: &[(Vec3, f32)]) -> usize {
+        structures::signed_timed(s, tree, q)
+    }
+    fn reference(
+        s: &dyn DynAccel<Triangle>,
+        (_, tris): &Self::Context,
+        q: &[(Vec3, f32)],
+    ) -> (Vec<Option<SignedPoint>>, Counters) {
+        structures::signed_exact(s, tris, q)
+    }
+    fn found(a: &Option<SignedPoint>) -> bool {
+        a.is_some_and(|s| s.inside)
+    }
+    fn agree(a: &Option<SignedPoint>, b: &Option<SignedPoint>) -> bool {
+        PointHit::agree(a.map(|s| s.near), b.map(|s| s.near))
+            && a.map(|s| s.inside) == b.map(|s| s.inside)
+    }
+    fn rust(&(p, max): &(Vec3, f32)) -> String {
+        format!(
+            "signed_distance(&WindingTree::build(&mesh)?, Vec3::new({:?}, {:?}, {:?}), {max:?})",
+            p.x, p.y, p.z
         )
     }
 }
@@ -168,14 +270,18 @@ struct AllHits;
 impl Queries for AllHits {
     type Query = Ray;
     type Answer = Vec<Hit>;
+    type Context = ();
     const KIND: &'static str = ALL_HITS_KIND;
     fn queries(args: &Args, source: &Source) -> Result<(Vec<Ray>, &'static str), String> {
         ray_queries(args, source)
     }
-    fn counted(s: &dyn DynAccel<Triangle>, q: &[Ray]) -> (Vec<Vec<Hit>>, Counters) {
+    fn context(_: &Source) -> ((), String) {
+        ((), String::new())
+    }
+    fn counted(s: &dyn DynAccel<Triangle>, _: &(), q: &[Ray]) -> (Vec<Vec<Hit>>, Counters) {
         structures::all_hits_counted(s, q)
     }
-    fn timed(s: &dyn DynAccel<Triangle>, q: &[Ray]) -> usize {
+    fn timed(s: &dyn DynAccel<Triangle>, _: &(), q: &[Ray]) -> usize {
         structures::all_hits_timed(s, q)
     }
     fn found(a: &Vec<Hit>) -> bool {
@@ -197,14 +303,22 @@ struct Filtered;
 impl Queries for Filtered {
     type Query = Ray;
     type Answer = (Option<Hit>, bool);
+    type Context = ();
     const KIND: &'static str = FILTERED_KIND;
     fn queries(args: &Args, source: &Source) -> Result<(Vec<Ray>, &'static str), String> {
         ray_queries(args, source)
     }
-    fn counted(s: &dyn DynAccel<Triangle>, q: &[Ray]) -> (Vec<(Option<Hit>, bool)>, Counters) {
+    fn context(_: &Source) -> ((), String) {
+        ((), String::new())
+    }
+    fn counted(
+        s: &dyn DynAccel<Triangle>,
+        _: &(),
+        q: &[Ray],
+    ) -> (Vec<(Option<Hit>, bool)>, Counters) {
         structures::filtered_counted(s, q, alpha_mask)
     }
-    fn timed(s: &dyn DynAccel<Triangle>, q: &[Ray]) -> usize {
+    fn timed(s: &dyn DynAccel<Triangle>, _: &(), q: &[Ray]) -> usize {
         structures::filtered_timed(s, q, alpha_mask)
     }
     fn found(a: &(Option<Hit>, bool)) -> bool {
@@ -276,6 +390,14 @@ pub(super) fn measure_filtered(
     measure_queries::<Filtered>(args, threads, entries)
 }
 
+pub(super) fn measure_signed(
+    args: &Args,
+    threads: usize,
+    entries: Vec<structures::Entry>,
+) -> Result<Report, String> {
+    measure_queries::<SignedDistances>(args, threads, entries)
+}
+
 fn measure_queries<K: Queries>(
     args: &Args,
     threads: usize,
@@ -301,6 +423,7 @@ fn measure_queries<K: Queries>(
         return Err("--points must be at least 1".into());
     }
     let (queries, view) = K::queries(args, &source)?;
+    let (context, note) = K::context(&source);
     let subset = checked_subset(queries.len(), args.check_rays.unwrap_or(20_000), args.seed);
     let subset_queries: Vec<K::Query> = subset.iter().map(|&i| queries[i]).collect();
 
@@ -308,14 +431,28 @@ fn measure_queries<K: Queries>(
     let mut answers = Vec::new();
     for entry in &entries {
         let (s, build_ms) = build_fastest(|| source.build(entry), args.repeats)?;
-        let (row, found) =
-            query_row::<K>(&entry.name, s.as_ref(), build_ms, &queries, args.repeats);
+        let (row, found) = query_row::<K>(
+            &entry.name,
+            s.as_ref(),
+            &context,
+            false,
+            build_ms,
+            &queries,
+            args.repeats,
+        );
         rows.push(row);
         answers.push(found);
     }
     let (brute, build_ms) = build_fastest(|| source.build(&structures::brute_force()), 1)?;
-    let (mut brute_row, brute_found) =
-        query_row::<K>("brute-force", brute.as_ref(), build_ms, &subset_queries, 0);
+    let (mut brute_row, brute_found) = query_row::<K>(
+        "brute-force",
+        brute.as_ref(),
+        &context,
+        true,
+        build_ms,
+        &subset_queries,
+        0,
+    );
 
     let mut disagreements = Vec::new();
     let mut record = |rows: &mut [Row], i: usize, expected: &K::Answer| {
@@ -348,7 +485,7 @@ fn measure_queries<K: Queries>(
             .any(|a| first.is_some_and(|f| !K::agree(f, &a[i])))
         {
             settled += 1;
-            let (expected, _) = K::counted(&*brute, &queries[i..=i]);
+            let (expected, _) = K::reference(&*brute, &context, &queries[i..=i]);
             record(&mut rows, i, &expected[0]);
         }
     }
@@ -373,20 +510,28 @@ fn measure_queries<K: Queries>(
         disagreements: Vec::new(),
         query_disagreements: disagreements,
         per_ray_answers: false,
+        note,
     })
 }
 
 /// One row's figures: a counted pass, then `repeats` timed passes (the fastest counts; with
-/// none, the counted pass is timed).
+/// none, the counted pass is timed). The `reference` row (brute force) answers through
+/// [`Queries::reference`].
 fn query_row<K: Queries>(
     name: &str,
     s: &dyn DynAccel<Triangle>,
+    context: &K::Context,
+    reference: bool,
     build_ms: f64,
     queries: &[K::Query],
     repeats: u32,
 ) -> (Row, Vec<K::Answer>) {
     let t = Instant::now();
-    let (found, counters) = K::counted(s, queries);
+    let (found, counters) = if reference {
+        K::reference(s, context, queries)
+    } else {
+        K::counted(s, context, queries)
+    };
     let mut best = t.elapsed();
     let mut hits = found.iter().filter(|a| K::found(a)).count();
     if repeats > 0 {
@@ -394,7 +539,7 @@ fn query_row<K: Queries>(
     }
     for _ in 0..repeats {
         let t = Instant::now();
-        hits = K::timed(s, queries);
+        hits = K::timed(s, context, queries);
         best = best.min(t.elapsed());
     }
     let row = Row::measured(name, s, build_ms, queries.len(), hits, counters, best);

@@ -65,6 +65,9 @@ pub fn run(args: &Args, entries: &[structures::Entry]) -> Result<Vec<Report>, St
             QueryKind::Filtered => {
                 pool.install(|| points::measure_filtered(&args, threads, entries))?
             }
+            QueryKind::SignedDistance => {
+                pool.install(|| points::measure_signed(&args, threads, entries))?
+            }
         };
         if args.json {
             println!("{}", to_json(&report));
@@ -309,6 +312,7 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
         disagreements,
         query_disagreements: Vec::new(),
         per_ray_answers: args.rays_file.is_some(),
+        note: String::new(),
     })
 }
 

@@ -102,6 +102,7 @@ mod mailbox;
 mod mesh;
 mod overlap;
 pub mod par;
+pub mod persist;
 mod pod;
 mod primitive;
 pub mod query;

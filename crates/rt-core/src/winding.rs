@@ -163,11 +163,25 @@ fn triangles<P: Primitive>(prims: &[P]) -> Result<Vec<[Vec3; 3]>, NotATriangle> 
 /// # Errors
 /// [`NotATriangle`] for the first valid primitive that is not a triangle.
 pub fn winding_number_exact<P: Primitive>(prims: &[P], point: Vec3) -> Result<f64, NotATriangle> {
-    let tris = triangles(prims)?;
-    if !point.is_finite() {
-        return Ok(f64::NAN);
+    // Read in place, not through `triangles`: a copy of every triangle per point would cost
+    // more than the sum and make the reference look slower than it is.
+    let q = point.as_dvec3();
+    let mut sum = 0.0;
+    for (i, p) in prims.iter().enumerate().filter(|(_, p)| p.is_valid()) {
+        let Some((t, _)) = p.as_triangle() else {
+            return Err(NotATriangle { prim: i as u32 });
+        };
+        sum += solid_angle_f64(
+            t.v0.as_dvec3() - q,
+            t.v1.as_dvec3() - q,
+            t.v2.as_dvec3() - q,
+        );
     }
-    Ok(winding_sum(&tris, point.as_dvec3()))
+    Ok(if point.is_finite() {
+        sum / (4.0 * PI)
+    } else {
+        f64::NAN
+    })
 }
 
 /// A winding number and how far from the exact sum it may be.

@@ -273,6 +273,11 @@ fn measure_all(args: &Args) -> Result<PathBuf, String> {
     let run = measure(&argv)?;
     animate_table(&mut page, &run);
 
+    // Minutes of builds at 10M triangles: the quick page leaves it out too.
+    if !args.quick {
+        page += &saved()?;
+    }
+
     if args.embree {
         page += &embree()?;
     }
@@ -658,6 +663,18 @@ fn one_ray_bundles() -> Result<String, String> {
         "\n### One-ray bundles\n\n`{command}`: a renderer that hands over one ray at a time \
          through the bundle queries must not pay for them (the target: at most 2% more than \
          the single-ray call).\n\n{table}"
+    ))
+}
+
+/// Loading saved structures against building them: the saved benchmark's own table.
+fn saved() -> Result<String, String> {
+    let (command, table) = cargo_bench(&["--bench", "saved"])?;
+    Ok(format!(
+        "\n## Saved structures\n\n`{command}`: each structure built, saved to a file and \
+         loaded from it (read warm from the page cache, framing and checksum checked, every \
+         invariant validated), each the median of three runs; builds on all threads, loading \
+         on one. Every loaded structure traces a 128 × 128 camera's primary rays and must \
+         answer them bit for bit as the built one (the hit share beside).\n\n{table}"
     ))
 }
 

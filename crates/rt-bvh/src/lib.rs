@@ -151,6 +151,15 @@
 //! bent by a wave stays close to a rebuilt one, while an explosion drives neighbours apart until
 //! a rebuild and its trace are cheaper than a refit and its trace (`cargo xtask animate`).
 //!
+//! # Saving and loading
+//! [`Persist`](rt_core::persist::Persist) writes a built tree to a versioned file and reads it back
+//! without rebuilding: the nodes (binary or wide), the triangle packs or the reordered primitives
+//! and their ids, and what the build left out; the SIMD kernels are chosen again for the loading
+//! CPU (the sections are listed in [`persist`]). Loading checks the file's framing and checksum,
+//! then runs [`Bvh::validate`], so a truncated, damaged or hostile file is refused with a typed
+//! [`LoadError`](rt_core::persist::LoadError) and a loaded tree answers every query bit for bit as
+//! the saved one.
+//!
 //! # Measurements
 //! Every figure (the shootout, rt-bvh against Embree 3, what each step from the binary tree
 //! gains, builds at scale) is on one generated page, `docs/results.md` in the repository, stamped
@@ -203,6 +212,7 @@ mod kernels;
 mod nearest;
 mod node;
 mod overlap;
+pub mod persist;
 mod refit;
 mod regions;
 mod simd;
@@ -548,6 +558,14 @@ impl<P: Primitive> Bvh<P> {
         }
     }
 
+    /// Chooses the fastest kernels this CPU runs for a wide tree: AVX2, else SSE2, else the
+    /// portable ones.
+    pub(crate) fn set_fastest_kernels(&mut self) {
+        let _ = [Kernels::Avx2, Kernels::Sse2, Kernels::Portable]
+            .into_iter()
+            .any(|k| self.set_kernels(k));
+    }
+
     /// Chooses the kernels that trace a wide tree. Returns `false`, changing nothing, when this
     /// CPU cannot run them (AVX2 without AVX2 and FMA) or the tree is binary.
     pub fn set_kernels(&mut self, kernels: Kernels) -> bool {
@@ -830,9 +848,7 @@ impl<P: Primitive> Accel for Bvh<P> {
             // The kernels asked for, else the fastest this CPU runs.
             let chosen = params.kernels.is_some_and(|k| bvh.set_kernels(k));
             if !chosen {
-                let _ = [Kernels::Avx2, Kernels::Sse2, Kernels::Portable]
-                    .into_iter()
-                    .any(|k| bvh.set_kernels(k));
+                bvh.set_fastest_kernels();
             }
         }
         bvh

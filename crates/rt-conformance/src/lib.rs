@@ -56,6 +56,7 @@ mod hits;
 mod inside;
 mod instances;
 mod refit;
+mod saved;
 pub use boxes::{BoxMismatch, compare_boxes, scene_boxes};
 pub use bundles::{
     BUNDLE_SIZES, bundle_orders, check_coherent_bundles, check_coherent_bundles_on,
@@ -68,6 +69,9 @@ pub use instances::{
     check_two_level_random, check_two_level_scene, two_level_scene,
 };
 pub use refit::{check_refit_case, check_refit_random, check_refit_scenes};
+pub use saved::{
+    DAMAGES, TRUNCATIONS, check_damaged, check_saved_case, check_saved_scenes, compare_saved,
+};
 
 /// A disagreement between a structure and brute force on one ray.
 #[derive(Clone, Debug)]

@@ -11,9 +11,9 @@ use crate::{
 /// The cost is one primitive test per valid primitive per ray; there is nothing to tune.
 #[derive(Clone, Debug)]
 pub struct BruteForce<P: Primitive> {
-    prims: Vec<P>,
-    ids: Vec<u32>,
-    bounds: Aabb,
+    pub(crate) prims: Vec<P>,
+    pub(crate) ids: Vec<u32>,
+    pub(crate) bounds: Aabb,
 }
 
 impl<P: Primitive> BruteForce<P> {

@@ -1,7 +1,7 @@
 //! The contract of the `rt-accel` structures: rays, boxes, primitives, the [`Accel`] trait every
 //! acceleration structure implements, traversal [`Stats`], the [`BruteForce`] reference,
-//! geometry sources, closest points, the winding number and signed distance, and instancing. It
-//! depends on glam and bytemuck only.
+//! geometry sources, closest points, the winding number and signed distance, instancing, and
+//! saved structures ([`persist`]). It depends on glam and bytemuck only.
 //!
 //! Around it: `rt-scene` loads meshes (OBJ, PLY, glTF), makes procedural scenes and has the
 //! camera; `rt-conformance` is the kit that checks any structure (yours too) against brute

@@ -102,6 +102,32 @@ pub fn map_chunks_mut<T: Send, R: Send>(
     }
 }
 
+/// `f(k, chunk)` for the `k`-th mutable chunk of `size` items (the last may be shorter), in
+/// order.
+pub fn map_chunks_mut_indexed<T: Send, R: Send>(
+    items: &mut [T],
+    size: usize,
+    f: impl Fn(usize, &mut [T]) -> R + Sync + Send,
+) -> Vec<R> {
+    #[cfg(feature = "parallel")]
+    {
+        use rayon::prelude::*;
+        items
+            .par_chunks_mut(size)
+            .enumerate()
+            .map(|(k, c)| f(k, c))
+            .collect()
+    }
+    #[cfg(not(feature = "parallel"))]
+    {
+        items
+            .chunks_mut(size)
+            .enumerate()
+            .map(|(k, c)| f(k, c))
+            .collect()
+    }
+}
+
 /// `f(input_chunk, output_chunk)` for matching chunks of `size` items of `input` and `out` (as
 /// many items as both have; the last chunk may be shorter).
 pub fn zip_chunks_mut<T: Sync, U: Send>(

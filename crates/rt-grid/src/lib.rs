@@ -64,6 +64,14 @@
 //! cell of its bounding box (`GridParams::bbox_insertion`, row `grid-bbox`) builds faster but
 //! references and tests several times more on scenes of large triangles.
 //!
+//! # Saving and loading
+//! [`Persist`](rt_core::persist::Persist) writes a built grid to a versioned file and reads it back
+//! without rebuilding: the box and resolution, the cell offsets, the references and the primitives
+//! (the sections are listed in [`persist`]). Loading checks the file's framing and checksum, then
+//! runs [`Grid::validate`], so a truncated, damaged or hostile file is refused with a typed
+//! [`LoadError`](rt_core::persist::LoadError) and a loaded grid answers every query bit for bit as
+//! the saved one.
+//!
 //! # Measurements
 //! On one generated page, `docs/results.md` in the repository (date, commit, CPU; written by
 //! `cargo xtask results`). What they show: where primitives are spread evenly (the random soup)
@@ -95,6 +103,7 @@ mod cell;
 pub mod dda;
 pub mod nearest;
 pub mod overlap;
+pub mod persist;
 mod regions;
 mod traverse;
 mod validate;

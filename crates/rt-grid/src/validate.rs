@@ -25,8 +25,11 @@ impl<P: Primitive> Grid<P> {
         let mut listed = vec![0usize; self.prims.len()];
         for i in 0..n {
             let (lo, hi) = (self.cells[i] as usize, self.cells[i + 1] as usize);
-            if lo > hi {
-                return err(format!("cell {i}: offsets decrease ({lo} > {hi})"));
+            if lo > hi || hi > self.refs.len() {
+                return err(format!(
+                    "cell {i}: offsets {lo}..{hi} decrease or pass the {} references",
+                    self.refs.len()
+                ));
             }
             let list = &self.refs[lo..hi];
             if list.windows(2).any(|w| w[0] >= w[1]) {
@@ -41,6 +44,13 @@ impl<P: Primitive> Grid<P> {
                 }
                 listed[id as usize] += 1;
             }
+        }
+        let valid = self.prims.iter().filter(|p| p.is_valid()).count();
+        if valid != self.valid_prims {
+            return err(format!(
+                "{} valid primitives counted, {valid} found",
+                self.valid_prims
+            ));
         }
         // Recompute every valid primitive's cells with the builder's test.
         let m = margin(&self.shape);

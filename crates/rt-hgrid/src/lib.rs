@@ -46,6 +46,14 @@
 //! shells around the point (`rt_grid::nearest::shells`), and a cell's nested grid the same way
 //! before the shell goes on.
 //!
+//! # Saving and loading
+//! [`Persist`](rt_core::persist::Persist) writes a built hierarchy to a versioned file and reads it
+//! back without rebuilding: every grid's box, resolution and cell range, the cells, the references
+//! and the primitives (the sections are listed in [`persist`]). Loading checks the file's framing
+//! and checksum, then runs [`HGrid::validate`], so a truncated, damaged or hostile file is refused
+//! with a typed [`LoadError`](rt_core::persist::LoadError) and a loaded hierarchy answers every
+//! query bit for bit as the saved one.
+//!
 //! # Measurements
 //! On one generated page, `docs/results.md` in the repository (date, commit, CPU; written by
 //! `cargo xtask results`). What they show: on the teapot in a stadium, where the uniform grid's
@@ -82,6 +90,7 @@ mod bundle;
 mod nearest;
 mod node;
 mod overlap;
+pub mod persist;
 mod regions;
 mod traverse;
 mod validate;

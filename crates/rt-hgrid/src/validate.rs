@@ -21,9 +21,16 @@ impl<P: Primitive> HGrid<P> {
         }
         let mut parent_of = vec![None; self.levels.len()];
         for (g, level) in self.levels.iter().enumerate() {
-            let end = level.first_cell + level.shape.cell_count();
-            if end > self.cells.len() || level.depth as usize >= MAX_LEVELS {
+            let end = level.first_cell.checked_add(level.shape.cell_count());
+            if end.is_none_or(|end| end > self.cells.len()) || level.depth as usize >= MAX_LEVELS {
                 return err(format!("grid {g}: cells or depth out of range"));
+            }
+            let end = level.first_cell + level.shape.cell_count();
+            let (lo, hi) = level.all;
+            if lo > hi || hi > self.refs.len() || (g == 0 && hi != 0) {
+                return err(format!(
+                    "grid {g}: parent references {lo}..{hi} out of range"
+                ));
             }
             for (c, cell) in self.cells[level.first_cell..end].iter().enumerate() {
                 match cell.nested() {
@@ -48,6 +55,14 @@ impl<P: Primitive> HGrid<P> {
         }
         if let Some(g) = (1..self.levels.len()).find(|&g| parent_of[g].is_none()) {
             return err(format!("grid {g}: no parent cell"));
+        }
+        let deepest = self.levels.iter().map(|l| l.depth).max().unwrap_or(0);
+        let valid_count = self.prims.iter().filter(|p| p.is_valid()).count();
+        if (deepest, valid_count) != (self.depth, self.valid_prims) {
+            return err(format!(
+                "stats say depth {} and {} valid primitives; there are {deepest} and {valid_count}",
+                self.depth, self.valid_prims
+            ));
         }
         // Every grid lists exactly what the builder's test says, given its parent's list.
         let valid: Vec<u32> = (0..self.prims.len() as u32)

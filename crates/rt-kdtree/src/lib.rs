@@ -101,6 +101,14 @@
 //! `cargo run --release -p rt-kdtree --example cost_sweep` prints the trade-off (nodes, depth,
 //! references, visits and tests per ray, build time, speed) on the bunny.
 //!
+//! # Saving and loading
+//! [`Persist`](rt_core::persist::Persist) writes a built tree to a versioned file and reads it back
+//! without rebuilding: the nodes, the references, the primitives and the root cell (the sections
+//! are listed in [`persist`]). Loading checks the file's framing and checksum, then runs
+//! [`KdTree::validate`], so a truncated, damaged or hostile file is refused with a typed
+//! [`LoadError`](rt_core::persist::LoadError) and a loaded tree answers every query bit for bit as
+//! the saved one.
+//!
 //! # Measurements
 //! The kd-tree's figures beside every other structure's (build time, memory, shape, visits and
 //! tests per ray, speed on several scenes and ray kinds, one thread and two), and the sweep
@@ -132,6 +140,7 @@ mod bundle;
 mod nearest;
 mod node;
 mod overlap;
+pub mod persist;
 mod regions;
 mod traverse;
 mod validate;

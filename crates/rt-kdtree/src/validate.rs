@@ -11,7 +11,7 @@ impl<P: Primitive> KdTree<P> {
     /// - every leaf's references are in bounds and name valid primitives that overlap the leaf's
     ///   cell;
     /// - every valid primitive is referenced by at least one leaf;
-    /// - the counts reported by `build_stats` match the tree.
+    /// - the counts reported by `build_stats` match the tree and the primitives.
     pub fn validate(&self) -> Result<(), ValidationError> {
         let err = |node: usize, message: String| Err(ValidationError::at(node, message));
         let n = self.nodes.len();
@@ -82,6 +82,16 @@ impl<P: Primitive> KdTree<P> {
                 format!(
                     "stats say {} leaves, {} empty, depth {}; the tree has {leaves}, {empty}, {depth_max}",
                     self.leaves, self.empty_leaves, self.max_depth
+                ),
+            );
+        }
+        let valid = self.prims.iter().filter(|p| p.is_valid()).count();
+        if valid != self.valid_prims {
+            return err(
+                0,
+                format!(
+                    "stats say {} valid primitives; there are {valid}",
+                    self.valid_prims
                 ),
             );
         }

@@ -88,6 +88,14 @@
 //! each box at the same midpoints the builder used, and skips any child farther than the best
 //! distance so far (`nearest.rs`).
 //!
+//! # Saving and loading
+//! [`Persist`](rt_core::persist::Persist) writes a built tree to a versioned file and reads it back
+//! without rebuilding: the root, the blocks of children, the references, the primitives and the
+//! root cube (the sections are listed in [`persist`]). Loading checks the file's framing and
+//! checksum, then runs [`Octree::validate`], so a truncated, damaged or hostile file is refused
+//! with a typed [`LoadError`](rt_core::persist::LoadError) and a loaded tree answers every query
+//! bit for bit as the saved one.
+//!
 //! # Measurements
 //! On one generated page, `docs/results.md` in the repository (date, commit, CPU; written by
 //! `cargo xtask results`). What they show: the octree visits a fraction of the uniform grid's
@@ -119,6 +127,7 @@ mod bundle;
 mod nearest;
 mod node;
 mod overlap;
+pub mod persist;
 mod regions;
 mod traverse;
 mod validate;

@@ -34,7 +34,9 @@ impl<P: Primitive> Octree<P> {
         }
         let mut seen = vec![false; self.blocks.len()];
         let mut todo = vec![(self.root, self.bounds, 0u32, items)];
+        let mut deepest = 0;
         while let Some((node, b, depth, items)) = todo.pop() {
+            deepest = deepest.max(depth);
             let Some(block) = node.children() else {
                 let range = node.references();
                 let Some(listed) = self.refs.get(range.clone()) else {
@@ -65,6 +67,12 @@ impl<P: Primitive> Octree<P> {
         }
         if let Some(b) = seen.iter().position(|s| !s) {
             return err(format!("block {b} is not reachable"));
+        }
+        if deepest != self.depth {
+            return err(format!(
+                "the depth is {}, but the tree goes {deepest} deep",
+                self.depth
+            ));
         }
         Ok(())
     }

@@ -9,6 +9,8 @@
 //!   answer each ray exactly as brute force does (the conformance kit's rule), invalid rays
 //!   included; with raw `f32` coordinates it must not panic or loop, and invalid rays must not
 //!   hit.
+//! - [`saved`]: bytes as a saved structure of each kind, with the checksum written again: an
+//!   error or a structure that answers, and that saves and loads to the same answers.
 //! - [`bundle`]: the same cases; every structure's bundle queries must answer each ray exactly
 //!   as its single-ray queries do (the same bits), in every order and bundle size the kit uses
 //!   ([`rt_conformance::compare_bundles`]), raw coordinates included: that promise has no
@@ -17,6 +19,7 @@
 use rt_bvh::{Bvh, BvhParams};
 use rt_conformance::{compare_bundles, compare_rays};
 use rt_core::glam::Vec3;
+use rt_core::persist::Persist;
 use rt_core::{Accel, BruteForce, Ray, Triangle};
 use rt_grid::{Grid, GridParams};
 use rt_hgrid::{HGrid, HGridParams};
@@ -253,4 +256,73 @@ fn compare<A: Accel<Prim = Triangle>>(
     rays: &[Ray],
 ) -> Result<(), String> {
     compare_rays(accel, brute, rays).map_err(|m| m.to_string())
+}
+
+/// The structures the `saved_*` fuzz targets load, by target name.
+pub const SAVED_TARGETS: [&str; 5] = [
+    "saved_bvh",
+    "saved_kdtree",
+    "saved_grid",
+    "saved_hgrid",
+    "saved_octree",
+];
+
+/// The body of the `saved_*` fuzz targets: `bytes` as a saved structure of `target` (one of
+/// [`SAVED_TARGETS`]). Loaded as they are (the checksum refuses nearly every change), then
+/// with the checksum written again, as a hostile file would have it. A loader may refuse
+/// anything but must not panic; a structure it returns must answer rays through its box, the
+/// closest points to its corners and the boxes around them without a panic (a walk that never
+/// ends is libFuzzer's `-timeout` to catch), and must save to a file that loads to a structure
+/// answering the same, bit for bit ([`rt_conformance::compare_saved`]).
+///
+/// # Errors
+/// A loaded structure whose own file does not load back or answers differently.
+///
+/// # Panics
+/// If `target` is not one of [`SAVED_TARGETS`].
+pub fn saved(target: &str, bytes: &[u8]) -> Result<(), String> {
+    match target {
+        "saved_bvh" => saved_as::<Bvh<Triangle>>(bytes),
+        "saved_kdtree" => saved_as::<KdTree<Triangle>>(bytes),
+        "saved_grid" => saved_as::<Grid<Triangle>>(bytes),
+        "saved_hgrid" => saved_as::<HGrid<Triangle>>(bytes),
+        "saved_octree" => saved_as::<Octree<Triangle>>(bytes),
+        _ => panic!("unknown saved target `{target}`"),
+    }
+}
+
+fn saved_as<A: Accel<Prim = Triangle> + Persist>(bytes: &[u8]) -> Result<(), String> {
+    let _ = A::load(bytes);
+    let mut file = bytes.to_vec();
+    if file.len() >= 96 {
+        let sum = rt_core::persist::file_checksum(&file);
+        file[88..96].copy_from_slice(&sum.to_le_bytes());
+    }
+    let Ok(accel) = A::load(&file) else {
+        return Ok(());
+    };
+    rt_conformance::compare_saved(&accel, &[], &rays_through(&accel.bounds()))
+}
+
+/// Rays through a box from outside along the axes and the diagonals, and from its centre.
+fn rays_through(bounds: &rt_core::Aabb) -> Vec<Ray> {
+    let (c, e) = if bounds.is_empty() || !bounds.min.is_finite() || !bounds.max.is_finite() {
+        (Vec3::ZERO, Vec3::ONE)
+    } else {
+        (bounds.center(), bounds.extent().max(Vec3::splat(1e-3)))
+    };
+    let mut rays = Vec::new();
+    for d in [
+        Vec3::X,
+        Vec3::Y,
+        Vec3::Z,
+        Vec3::ONE,
+        Vec3::new(1.0, -1.0, 1.0),
+        Vec3::new(-1.0, 1.0, 1.0),
+        Vec3::new(1.0, 1.0, -1.0),
+    ] {
+        rays.push(Ray::new(c - d * e * 2.0, d));
+        rays.push(Ray::new(c, -d));
+    }
+    rays
 }

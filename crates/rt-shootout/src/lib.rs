@@ -210,6 +210,8 @@ mod guide {
     struct Overlap;
     #[doc = include_str!("../../../docs/inside-outside.md")]
     struct InsideOutside;
+    #[doc = include_str!("../../../docs/saved-structures.md")]
+    struct SavedStructures;
     #[doc = include_str!("../../../docs/ray-queries.md")]
     struct RayQueries;
     #[doc = include_str!("../../../docs/instances.md")]

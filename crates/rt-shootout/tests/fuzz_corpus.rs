@@ -4,15 +4,32 @@
 //! The seeds are generated here, so they stay in step with the formats and the kit's scenes:
 //! `RT_BLESS=1 cargo test -p rt-shootout --test fuzz_corpus` rewrites them.
 
+use rt_bvh::Bvh;
 use rt_conformance::{SCENES, lattice_rays, lattice_triangles, scene};
 use rt_core::glam::Vec3;
-use rt_core::{Mesh, Ray, Triangle};
+use rt_core::persist::Persist;
+use rt_core::{Accel, Mesh, Ray, Triangle};
+use rt_grid::Grid;
+use rt_hgrid::HGrid;
+use rt_kdtree::KdTree;
+use rt_octree::Octree;
 use rt_scene::SceneFormat;
 use rt_scene::save::{PlyEncoding, glb_bytes, gltf_embedded, ply_bytes};
 use rt_shootout::fuzz;
 use std::path::{Path, PathBuf};
 
-const TARGETS: [&str; 5] = ["load_obj", "load_ply", "load_gltf", "trace", "bundle"];
+const TARGETS: [&str; 10] = [
+    "load_obj",
+    "load_ply",
+    "load_gltf",
+    "trace",
+    "bundle",
+    "saved_bvh",
+    "saved_kdtree",
+    "saved_grid",
+    "saved_hgrid",
+    "saved_octree",
+];
 
 fn fuzz_dir() -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join("../../fuzz")
@@ -31,6 +48,11 @@ fn run(target: &str, what: &str, bytes: &[u8]) {
         }
         "bundle" => {
             if let Err(e) = fuzz::bundle(bytes) {
+                panic!("{what}: {e}");
+            }
+        }
+        saved if fuzz::SAVED_TARGETS.contains(&saved) => {
+            if let Err(e) = fuzz::saved(saved, bytes) {
                 panic!("{what}: {e}");
             }
         }
@@ -114,7 +136,41 @@ fn seeds() -> Vec<(&'static str, String, Vec<u8>)> {
         .map(|(_, name, bytes)| ("bundle", name.clone(), bytes.clone()))
         .collect();
     out.extend(bundle);
+    // Each structure saved with each of its presets over the kit's smaller scenes: files the
+    // loaders accept, for the `saved_*` targets to change.
+    for name in SAVED_SCENES {
+        let s = scene(name);
+        saved_seeds::<Bvh<Triangle>>(&mut out, "saved_bvh", name, &s.triangles);
+        saved_seeds::<KdTree<Triangle>>(&mut out, "saved_kdtree", name, &s.triangles);
+        saved_seeds::<Grid<Triangle>>(&mut out, "saved_grid", name, &s.triangles);
+        saved_seeds::<HGrid<Triangle>>(&mut out, "saved_hgrid", name, &s.triangles);
+        saved_seeds::<Octree<Triangle>>(&mut out, "saved_octree", name, &s.triangles);
+    }
     out
+}
+
+/// The kit's scenes whose saved files stay small (a few kilobytes), so a fuzzer runs fast.
+const SAVED_SCENES: [&str; 5] = [
+    "empty_scene",
+    "one_triangle",
+    "shared_edge",
+    "far_origins",
+    "lattice",
+];
+
+fn saved_seeds<A: Accel<Prim = Triangle> + Persist>(
+    out: &mut Vec<(&'static str, String, Vec<u8>)>,
+    target: &'static str,
+    scene: &str,
+    tris: &[Triangle],
+) {
+    for (preset, params) in A::presets() {
+        out.push((
+            target,
+            format!("{scene}-{preset}.bin"),
+            A::build(tris, &params).save(),
+        ));
+    }
 }
 
 /// The cube's triangles on the lattice (low bit of the first byte clear) and rays through its

@@ -11,3 +11,4 @@ mod overlap;
 mod parallel;
 mod refit;
 mod reinsertion;
+mod saved;

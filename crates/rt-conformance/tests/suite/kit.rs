@@ -3,6 +3,7 @@
 
 use rt_conformance::{STALL_LIMIT, check_case_within, check_random, scene};
 use rt_core::glam::Vec3;
+use rt_core::persist::{LoadError, Persist, Reader, Writer};
 use rt_core::{
     Aabb, Accel, BallQuery, BoxQuery, BruteForce, BuildStats, Hit, PrimHit, Primitive, Ray,
     RayQuery, Stats, Triangle,
@@ -918,4 +919,86 @@ fn a_signed_distance_without_its_sign_or_a_wrong_parity_fails_the_kit() {
     let e = check_case_within::<SignWrong<1>>(&(), &s.triangles, &s.rays, STALL_LIMIT)
         .expect_err("a wrong crossing parity must be caught");
     assert!(e.contains("inside_by_parity disagrees"), "{e}");
+}
+
+/// Brute force whose saved file loads wrongly on purpose: the loaded structure answers without
+/// its last primitive (`MODE` 0), or its loader trusts an index the file gives (1).
+struct SavedWrong<const MODE: u8>(BruteForce<Triangle>, Vec<Triangle>);
+
+impl<const MODE: u8> Accel for SavedWrong<MODE> {
+    type Prim = Triangle;
+    type Params = ();
+    const NAME: &'static str = "saved-wrong";
+    fn presets() -> Vec<(&'static str, ())> {
+        vec![("default", ())]
+    }
+    fn build(prims: &[Triangle], _: &()) -> Self {
+        Self(BruteForce::build(prims, &()), prims.to_vec())
+    }
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        self.0.intersect_with(ray, stats)
+    }
+    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+        self.0.occluded_with(ray, stats)
+    }
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        self.0.ray_query(ray, query, stats);
+    }
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.ball_query(query, stats);
+    }
+    fn box_query<Q: BoxQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.box_query(query, stats);
+    }
+    fn bounds(&self) -> Aabb {
+        self.0.bounds()
+    }
+    fn memory_bytes(&self) -> usize {
+        self.0.memory_bytes()
+    }
+    fn build_stats(&self) -> BuildStats {
+        self.0.build_stats()
+    }
+}
+
+impl<const MODE: u8> Persist for SavedWrong<MODE> {
+    const KIND: &'static str = "kit::SavedWrong";
+    const LAYOUT: u32 = 1;
+    type Saved = Triangle;
+    fn write_sections<'a>(&'a self, w: &mut Writer<'a>) {
+        w.section("first", &[0u32]);
+        w.section("prims", &self.1);
+    }
+    fn read_sections(r: &Reader<'_>) -> Result<Self, LoadError> {
+        let prims: Vec<Triangle> = r.section("prims")?;
+        let first = r.value::<u32>("first")? as usize;
+        if MODE == 1 {
+            // Trusts `first`: a hostile file makes this index out of bounds.
+            let _ = prims[first];
+        }
+        // `MODE` 0 answers without the last primitive, though it saves it again.
+        let kept = prims.len() - usize::from(MODE == 0 && !prims.is_empty());
+        Ok(Self(BruteForce::build(&prims[..kept], &()), prims))
+    }
+    fn check_loaded(&self) -> Result<(), LoadError> {
+        Ok(())
+    }
+}
+
+#[test]
+fn a_saved_structure_that_answers_otherwise_or_trusts_its_file_fails_the_kit() {
+    let s = scene("closed_meshes");
+    let e = rt_conformance::check_saved_case::<SavedWrong<0>>(&(), &s.triangles, &s.rays, 1)
+        .expect_err("a loaded structure without its last primitive must be caught");
+    assert!(e.contains("after loading"), "{e}");
+    let s = scene("one_triangle");
+    let e = rt_conformance::check_saved_case::<SavedWrong<1>>(&(), &s.triangles, &s.rays, 1)
+        .expect_err("a loader that indexes with a number from the file must be caught");
+    assert!(e.contains("loading panics with bytes"), "{e}");
+}
+
+/// Brute force itself saves and loads: every scene, answers bit for bit, damage refused.
+#[test]
+fn brute_force_saves_and_loads() {
+    rt_conformance::check_saved_scenes::<BruteForce<Triangle>>();
 }

@@ -6,3 +6,4 @@ mod bundles;
 mod conformance;
 mod lattice;
 mod overlap;
+mod saved;

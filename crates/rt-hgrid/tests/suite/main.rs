@@ -5,3 +5,4 @@
 mod bundles;
 mod conformance;
 mod lattice;
+mod saved;

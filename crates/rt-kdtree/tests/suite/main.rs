@@ -4,3 +4,4 @@
 
 mod bundles;
 mod conformance;
+mod saved;

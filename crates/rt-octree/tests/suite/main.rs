@@ -6,3 +6,4 @@ mod bundles;
 mod conformance;
 mod degenerate;
 mod lattice;
+mod saved;

@@ -1,7 +1,8 @@
 //! How much faster is loading a saved structure than building it? For every structure on the
 //! Stanford bunny, and for the BVH on the 10-million-triangle terrain: the build, `save_file`
 //! and `load_file` (read the file, check its framing and checksum, validate every invariant),
-//! each the median of three runs, on all threads (builds use rayon; loading is one thread).
+//! each the median of three runs, on all threads (builds, and loading's reading and checks,
+//! use rayon).
 //! The file is written to the system's temporary folder and read back warm from the page cache,
 //! as a program that saved its structure on an earlier run reads it. Every loaded structure
 //! then traces the primary rays of a 128 × 128 camera filling the image with the mesh, and must

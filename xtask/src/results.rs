@@ -672,9 +672,9 @@ fn saved() -> Result<String, String> {
     Ok(format!(
         "\n## Saved structures\n\n`{command}`: each structure built, saved to a file and \
          loaded from it (read warm from the page cache, framing and checksum checked, every \
-         invariant validated), each the median of three runs; builds on all threads, loading \
-         on one. Every loaded structure traces a 128 × 128 camera's primary rays and must \
-         answer them bit for bit as the built one (the hit share beside).\n\n{table}"
+         invariant validated), each the median of three runs, both on all threads. Every \
+         loaded structure traces a 128 × 128 camera's primary rays and must answer them bit \
+         for bit as the built one (the hit share beside).\n\n{table}"
     ))
 }
 

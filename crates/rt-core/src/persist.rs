@@ -580,12 +580,11 @@ impl<'a> Reader<'a> {
 
     /// Reads section `e` into `out` (its length), block by block on the builders' threads,
     /// and returns its checksum.
-    ///
-    /// PERF: the 606 MB file of the 10M-triangle terrain's BVH took 0.35 s to read whole and
-    /// 0.27 s more to copy into the tree's arrays; read straight into them, a block per task
-    /// on two threads with each block's checksum taken while it is in cache, 0.19 s (`cargo
-    /// bench -p rt-benches --bench saved`).
     fn fill(&self, e: Entry, out: &mut [u8]) -> Result<u64, LoadError> {
+        // PERF: the 606 MB file of the 10M-triangle terrain's BVH took 0.35 s to read whole
+        // and 0.27 s more to copy into the tree's arrays; read straight into them, a block per
+        // task on two threads with each block's checksum taken while it is in cache, 0.19 s
+        // (`cargo bench -p rt-benches --bench saved`).
         let blocks = crate::par::map_chunks_mut_indexed(out, BLOCK, |k, block| {
             let at = e.at + k * BLOCK;
             match &self.source {
@@ -860,17 +859,6 @@ pub fn to_bool(value: u32, what: &str) -> Result<bool, LoadError> {
             "{what} is {other}, not 0 or 1"
         ))),
     }
-}
-
-/// Reads the file at `path`, naming it in any error.
-///
-/// # Errors
-/// [`LoadError::Io`] when the file cannot be read.
-pub fn read_file(path: &Path) -> Result<Vec<u8>, LoadError> {
-    std::fs::read(path).map_err(|e| LoadError::Io {
-        path: path.to_path_buf(),
-        message: e.to_string(),
-    })
 }
 
 #[cfg(test)]

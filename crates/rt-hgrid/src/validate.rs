@@ -22,10 +22,12 @@ impl<P: Primitive> HGrid<P> {
         let mut parent_of = vec![None; self.levels.len()];
         for (g, level) in self.levels.iter().enumerate() {
             let end = level.first_cell.checked_add(level.shape.cell_count());
-            if end.is_none_or(|end| end > self.cells.len()) || level.depth as usize >= MAX_LEVELS {
-                return err(format!("grid {g}: cells or depth out of range"));
+            let Some(end) = end.filter(|&end| end <= self.cells.len()) else {
+                return err(format!("grid {g}: cells out of range"));
+            };
+            if level.depth as usize >= MAX_LEVELS {
+                return err(format!("grid {g}: depth out of range"));
             }
-            let end = level.first_cell + level.shape.cell_count();
             let (lo, hi) = level.all;
             if lo > hi || hi > self.refs.len() || (g == 0 && hi != 0) {
                 return err(format!(

@@ -117,16 +117,17 @@ pub fn compare_rays<A: Accel>(
     reference: &BruteForce<A::Prim>,
     rays: &[Ray],
 ) -> Result<(), Mismatch> {
-    compare_rays_probed(accel, reference, rays, &Probe::default(), true)
+    compare_rays_probed(accel, reference, rays, &Probe::default(), true, true)
 }
 
-/// [`compare_rays`], telling `probe` which ray each query is about before making it; with
-/// `any` false, closest-hit queries only.
+/// [`compare_rays`], telling `probe` which ray each query is about before making it; `closest`
+/// and `any` say which of the two queries to check.
 fn compare_rays_probed<A: Accel>(
     accel: &A,
     reference: &BruteForce<A::Prim>,
     rays: &[Ray],
     probe: &Probe,
+    closest: bool,
     any: bool,
 ) -> Result<(), Mismatch> {
     for ray in rays {
@@ -136,7 +137,11 @@ fn compare_rays_probed<A: Accel>(
             // no primitive test and at most the root visited by each query (a NaN direction or
             // an origin at 10³⁰ must not walk the whole tree).
             let mut c = Counters::default();
-            let hit = accel.intersect_with(ray, &mut c);
+            let hit = if closest {
+                accel.intersect_with(ray, &mut c)
+            } else {
+                None
+            };
             let occluded = any && accel.occluded_with(ray, &mut c);
             if hit.is_some() || occluded || c.prim_tests > 0 || c.node_visits > 2 {
                 return Err(Mismatch {
@@ -157,37 +162,8 @@ fn compare_rays_probed<A: Accel>(
             continue;
         }
         let expected = reference.intersect(ray);
-        let got = accel.intersect(ray);
-        if !Hit::agree(expected, got) {
-            return Err(Mismatch {
-                query: "intersect",
-                ray: *ray,
-                expected,
-                got,
-                detail: Box::default(),
-            });
-        }
-        let mut counters = Counters::default();
-        let counted = accel.intersect_with(ray, &mut counters);
-        if !Hit::agree(got, counted) {
-            return Err(Mismatch {
-                query: "intersect_with(Counters)",
-                ray: *ray,
-                expected: got,
-                got: counted,
-                detail: Box::default(),
-            });
-        }
-        let mut trace = Trace::default();
-        let traced = accel.intersect_with(ray, &mut trace);
-        if let Err(why) = trace_agrees(&trace, counters, traced) {
-            return Err(Mismatch {
-                query: "intersect_with(Trace)",
-                ray: *ray,
-                expected: got,
-                got: traced,
-                detail: why.into(),
-            });
+        if closest {
+            check_closest(accel, ray, expected)?;
         }
         if !any {
             continue;
@@ -210,6 +186,44 @@ fn compare_rays_probed<A: Accel>(
                 detail: Box::default(),
             });
         }
+    }
+    Ok(())
+}
+
+/// Checks the closest hit of one valid ray against brute force's `expected`: plain, counted
+/// and traced.
+fn check_closest<A: Accel>(accel: &A, ray: &Ray, expected: Option<Hit>) -> Result<(), Mismatch> {
+    let got = accel.intersect(ray);
+    if !Hit::agree(expected, got) {
+        return Err(Mismatch {
+            query: "intersect",
+            ray: *ray,
+            expected,
+            got,
+            detail: Box::default(),
+        });
+    }
+    let mut counters = Counters::default();
+    let counted = accel.intersect_with(ray, &mut counters);
+    if !Hit::agree(got, counted) {
+        return Err(Mismatch {
+            query: "intersect_with(Counters)",
+            ray: *ray,
+            expected: got,
+            got: counted,
+            detail: Box::default(),
+        });
+    }
+    let mut trace = Trace::default();
+    let traced = accel.intersect_with(ray, &mut trace);
+    if let Err(why) = trace_agrees(&trace, counters, traced) {
+        return Err(Mismatch {
+            query: "intersect_with(Trace)",
+            ray: *ray,
+            expected: got,
+            got: traced,
+            detail: why.into(),
+        });
     }
     Ok(())
 }
@@ -451,58 +465,149 @@ pub fn check_case_within<A: Accel + 'static>(
     rays: &[Ray],
     stall: std::time::Duration,
 ) -> Result<(), String> {
-    check_queries::<A>(params, prims, rays, stall, true)
+    check_parts::<A>(params, prims, rays, stall, &Part::ALL, true)
 }
 
-/// [`check_case_within`], with `any` false checking closest-hit queries only.
-fn check_queries<A: Accel + 'static>(
+/// One part of what [`check_case`] checks. Grading reports the parts apart, so that a structure
+/// whose any-hit query is not written yet still shows which closest-hit checks pass.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Part {
+    /// The closest hit ([`Accel::intersect`], also counted and traced), invalid rays answered
+    /// at once, and the build's reports ([`Accel::build_stats`] `valid_prims`, [`check_regions`]).
+    Closest,
+    /// The any hit ([`Accel::occluded`]), invalid rays answered at once.
+    Any,
+    /// The bundle queries give the single queries' bits ([`compare_bundles`]).
+    Bundles,
+    /// Closest points ([`compare_points`]).
+    ClosestPoints,
+    /// Box overlap ([`compare_boxes`]).
+    BoxOverlap,
+    /// All hits, hit counts and filtered queries ([`compare_hits`]).
+    AllHits,
+    /// Signed distance and crossing parity ([`compare_inside`]).
+    Inside,
+}
+
+impl Part {
+    /// Every part, in the order [`check_case`] checks them.
+    pub const ALL: [Part; 7] = [
+        Part::Closest,
+        Part::Any,
+        Part::Bundles,
+        Part::ClosestPoints,
+        Part::BoxOverlap,
+        Part::AllHits,
+        Part::Inside,
+    ];
+
+    /// The part's name, as grading reports it: `closest-hit`, `any-hit`, `bundles`,
+    /// `closest-points`, `box-overlap`, `all-hits` or `inside`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Part::Closest => "closest-hit",
+            Part::Any => "any-hit",
+            Part::Bundles => "bundles",
+            Part::ClosestPoints => "closest-points",
+            Part::BoxOverlap => "box-overlap",
+            Part::AllHits => "all-hits",
+            Part::Inside => "inside",
+        }
+    }
+
+    /// The part called `name` (see [`Part::name`]).
+    pub fn from_name(name: &str) -> Option<Part> {
+        Part::ALL.into_iter().find(|p| p.name() == name)
+    }
+}
+
+/// [`check_case_within`] for one part only: the structure is built and checked on `rays` (or,
+/// for the point and box parts, on the points and boxes [`scene_points`] and [`scene_boxes`]
+/// make from them) under the same watchdog.
+///
+/// # Errors
+/// As [`check_case`].
+pub fn check_part<A: Accel + 'static>(
+    params: &A::Params,
+    prims: &[A::Prim],
+    rays: &[Ray],
+    part: Part,
+    stall: std::time::Duration,
+) -> Result<(), String> {
+    check_parts::<A>(params, prims, rays, stall, &[part], true)
+}
+
+/// Checks `parts` of [`check_case_within`]; with `bundles_any` false, the bundle part checks the
+/// closest-hit bundles only.
+fn check_parts<A: Accel + 'static>(
     params: &A::Params,
     prims: &[A::Prim],
     rays: &[Ray],
     stall: std::time::Duration,
-    any: bool,
+    parts: &[Part],
+    bundles_any: bool,
 ) -> Result<(), String> {
     let (params, prims, rays) = (params.clone(), prims.to_vec(), rays.to_vec());
+    let parts = parts.to_vec();
     let scene = scene_summary(&prims);
     watched(A::NAME, stall, &scene, move |probe| {
+        let has = |p: Part| parts.contains(&p);
         probe.building(prims.len());
         let reference = BruteForce::build(&prims, &());
         let accel = A::build(&prims, &params);
-        probe.checking();
         let scene = || scene_summary(&prims);
-        let valid = prims.iter().filter(|p| p.is_valid()).count();
-        let kept = accel.build_stats().valid_prims;
-        if kept != valid {
-            return Err(format!(
-                "{}: build_stats().valid_prims is {kept}, but {valid} primitives are valid{}",
-                A::NAME,
-                scene()
-            ));
+        let failed =
+            |m: &dyn fmt::Display| format!("{} with {:?}: {m}{}", A::NAME, params, scene());
+        if has(Part::Closest) {
+            probe.checking();
+            let valid = prims.iter().filter(|p| p.is_valid()).count();
+            let kept = accel.build_stats().valid_prims;
+            if kept != valid {
+                return Err(format!(
+                    "{}: build_stats().valid_prims is {kept}, but {valid} primitives are valid{}",
+                    A::NAME,
+                    scene()
+                ));
+            }
+            check_regions(&accel).map_err(|m| failed(&m))?;
         }
-        check_regions(&accel)
-            .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
-        compare_rays_probed(&accel, &reference, &rays, probe, any)
-            .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
-        // The single queries agree with brute force; the bundle queries must agree with them.
-        bundles::compare_bundles_probed(&accel, &rays, any, probe)
-            .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
-        if any {
-            let points = scene_points(&prims, &rays);
-            compare_points_probed(&accel, &reference, &points, probe)
-                .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
+        if has(Part::Closest) || has(Part::Any) {
+            compare_rays_probed(
+                &accel,
+                &reference,
+                &rays,
+                probe,
+                has(Part::Closest),
+                has(Part::Any),
+            )
+            .map_err(|m| failed(&m))?;
+        }
+        if has(Part::Bundles) {
+            // The bundle queries must give the single queries' answers.
+            bundles::compare_bundles_probed(&accel, &rays, bundles_any, probe)
+                .map_err(|m| failed(&m))?;
+        }
+        let points = scene_points(&prims, &rays);
+        if has(Part::ClosestPoints) {
+            compare_points_probed(&accel, &reference, &points, probe).map_err(|m| failed(&m))?;
+        }
+        if has(Part::BoxOverlap) {
             let boxes = scene_boxes(&prims, prims.len() as u64);
             boxes::compare_boxes_probed(&accel, &reference, &boxes, probe)
-                .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
+                .map_err(|m| failed(&m))?;
+        }
+        if has(Part::AllHits) {
             // Every ray of small cases, an even spread of at most `HITS_RAYS` of large ones: each
             // ray runs seven more walks here, most of them to the ray's end.
             let stride = rays.len().div_ceil(hits::HITS_RAYS).max(1);
             let some: Vec<Ray> = rays.iter().step_by(stride).copied().collect();
-            hits::compare_hits_probed(&accel, &prims, &some, probe)
-                .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
-            // Parity counts crossings with `count_hits`, checked just above.
+            hits::compare_hits_probed(&accel, &prims, &some, probe).map_err(|m| failed(&m))?;
+        }
+        if has(Part::Inside) {
+            // Parity counts crossings with `count_hits`, which the all-hits part checks.
             let near = inside::some_points(&points);
             inside::compare_inside_probed(&accel, &reference, &prims, &near, probe)
-                .map_err(|m| format!("{} with {:?}: {m}{}", A::NAME, params, scene()))?;
+                .map_err(|m| failed(&m))?;
         }
         Ok(())
     })
@@ -831,7 +936,8 @@ pub fn compare_slices<P: Primitive>(
 /// With a description of the first disagreement with brute force.
 pub fn check_scene_closest<A: Accel<Prim = Triangle> + 'static>(params: &A::Params, name: &str) {
     let s = scene(name);
-    if let Err(e) = check_queries::<A>(params, &s.triangles, &s.rays, STALL_LIMIT, false) {
+    let parts = [Part::Closest, Part::Bundles];
+    if let Err(e) = check_parts::<A>(params, &s.triangles, &s.rays, STALL_LIMIT, &parts, false) {
         panic!("conformance scene `{name}` (closest hit) failed: {e}");
     }
 }
@@ -981,6 +1087,31 @@ pub fn rays_into_cube(seed: u64, n: usize) -> Vec<Ray> {
 /// # Panics
 /// With the shrunk failing case.
 pub fn check_random<A: Accel<Prim = Triangle> + 'static>(params: &A::Params) {
+    if let Err(e) = random_scenes(A::NAME, |tris, rays| check_case::<A>(params, tris, rays)) {
+        panic!("{e}");
+    }
+}
+
+/// [`check_random`] for one part of the kit only ([`check_part`]), returning the shrunk
+/// failing case instead of panicking.
+///
+/// # Errors
+/// The shrunk failing case's message.
+pub fn check_random_part<A: Accel<Prim = Triangle> + 'static>(
+    params: &A::Params,
+    part: Part,
+    stall: std::time::Duration,
+) -> Result<(), String> {
+    random_scenes(A::NAME, |tris, rays| {
+        check_part::<A>(params, tris, rays, part, stall)
+    })
+}
+
+/// Runs proptest on random triangle scenes and rays (see [`check_random`]) with `check`.
+fn random_scenes(
+    name: &str,
+    check: impl Fn(&[Triangle], &[Ray]) -> Result<(), String>,
+) -> Result<(), String> {
     let coord = || prop_oneof![(-6i32..=6).prop_map(|i| i as f32 * 0.5), -4.0f32..4.0];
     let vec3 = move || (coord(), coord(), coord()).prop_map(|(x, y, z)| Vec3::new(x, y, z));
     let tri = (vec3(), vec3(), vec3()).prop_map(|(a, b, c)| Triangle::new(a, b, c));
@@ -1038,11 +1169,9 @@ pub fn check_random<A: Accel<Prim = Triangle> + 'static>(params: &A::Params) {
                 r.is_valid().then_some(r)
             })
             .collect();
-        check_case::<A>(params, &tris, &rays).map_err(|e| stall_stops_shrinking(&stalled, e))
+        check(&tris, &rays).map_err(|e| stall_stops_shrinking(&stalled, e))
     });
-    if let Err(e) = result {
-        panic!("{}", proptest_failure(A::NAME, "", e));
-    }
+    result.map_err(|e| proptest_failure(name, "", e))
 }
 
 /// A failed case for proptest. After a stall every later case passes at once: shrinking a case
@@ -1055,7 +1184,7 @@ fn stall_stops_shrinking(stalled: &std::sync::atomic::AtomicBool, e: String) -> 
 }
 
 /// The words that mark a stall in a failure message.
-const STALL_MARK: &str = "did not return within";
+pub const STALL_MARK: &str = "did not return within";
 
 /// The message of a failed proptest run: the failure (which names the ray and, when small, the
 /// scene) without the shrunk input's full dump, which for a large scene runs to hundreds of

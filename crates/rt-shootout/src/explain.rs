@@ -138,7 +138,12 @@ fn explain_one(args: &ExplainArgs, entry: &Entry, triangles: &[Triangle], ray: &
         );
     }
     if trace.events.is_empty() {
-        out += "(this structure reports no steps: its traversal does not call Stats::event)\n";
+        out += &format!(
+            "({} reports no steps, only the counts below: its traversal calls \
+             stats.node_visit() and stats.prim_test() but not Stats::event; the helpers of \
+             rt_core::trace (report, tested, blocked) add the steps)\n",
+            entry.name
+        );
     }
     let c = trace.counters;
     out += &format!(

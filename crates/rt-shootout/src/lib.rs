@@ -57,14 +57,24 @@ impl Default for Shootout {
     }
 }
 
-/// The command line of [`Shootout::main`]: `compare`'s flags.
+/// The command line of [`Shootout::main`]: `compare`'s flags, or the `explain` subcommand.
 #[derive(Parser, Debug)]
 #[command(
-    about = "Build structures on one scene, trace the same rays through each, check every answer against brute force and the others, and print cost and speed."
+    about = "Build structures on one scene, trace the same rays through each, check every answer against brute force and the others, and print cost and speed.",
+    args_conflicts_with_subcommands = true
 )]
 struct Cli {
+    #[command(subcommand)]
+    command: Option<Sub>,
     #[command(flatten)]
     args: Args,
+}
+
+#[derive(clap::Subcommand, Debug)]
+enum Sub {
+    /// One ray's walk through one or more rows, step by step, checked against brute force (as
+    /// `cargo xtask explain`; a grade's replay commands use it).
+    Explain(explain::ExplainArgs),
 }
 
 impl Shootout {
@@ -137,7 +147,20 @@ impl Shootout {
         let matches = command
             .try_get_matches()
             .unwrap_or_else(|e| cli::exit_on_error(e));
-        let cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| cli::exit_on_error(e));
+        let mut cli = Cli::from_arg_matches(&matches).unwrap_or_else(|e| cli::exit_on_error(e));
+        if let Some(Sub::Explain(args)) = &cli.command {
+            return match explain::explain(args, &self.entries) {
+                Ok(text) => {
+                    print!("{text}");
+                    ExitCode::SUCCESS
+                }
+                Err(e) => {
+                    eprintln!("error: {e}");
+                    ExitCode::from(2)
+                }
+            };
+        }
+        cli.args.flags = std::env::args_os().skip(1).collect();
         self.main_with(&cli.args)
     }
 
@@ -147,6 +170,9 @@ impl Shootout {
     pub fn main_with(&self, args: &Args) -> ExitCode {
         if args.grade.is_none() {
             return exit_code(self.run(args));
+        }
+        if args.grade_worker.is_some() {
+            return grade::worker(args, &self.entries);
         }
         match self.grade(args) {
             Ok(path) => {
@@ -171,10 +197,15 @@ where
     I: IntoIterator<Item = T>,
     T: Into<std::ffi::OsString> + Clone,
 {
-    let argv = std::iter::once(std::ffi::OsString::from("shootout"))
-        .chain(flags.into_iter().map(Into::into));
-    let mut args = Cli::try_parse_from(argv).map_err(|e| e.to_string())?.args;
+    let flags: Vec<std::ffi::OsString> = flags.into_iter().map(Into::into).collect();
+    let argv = std::iter::once(std::ffi::OsString::from("shootout")).chain(flags.iter().cloned());
+    let cli = Cli::try_parse_from(argv).map_err(|e| e.to_string())?;
+    if cli.command.is_some() {
+        return Err("args_from takes compare's flags, not a subcommand".into());
+    }
+    let mut args = cli.args;
     args.scene = args.scenes.first().cloned().unwrap_or_default();
+    args.flags = flags;
     Ok(args)
 }
 

@@ -5,7 +5,6 @@
 mod groups;
 
 use groups::{GROUP, Groups};
-use rt_core::{Accel, BuildStats, Hit, Ray, Stats, Triangle};
 
 #[test]
 fn a_structure_from_outside_runs_next_to_the_built_in_rows() {
@@ -43,114 +42,54 @@ fn a_structure_from_outside_runs_next_to_the_built_in_rows() {
     );
 }
 
-/// [`Groups`] with a classic bug: it forgets the last triangle of every group.
-struct DropsLast(Groups);
-
-impl Accel for DropsLast {
-    type Prim = Triangle;
-    type Params = ();
-    const NAME: &'static str = "drops-last";
-    fn presets() -> Vec<(&'static str, ())> {
-        vec![("default", ())]
-    }
-    fn build(prims: &[Triangle], _: &()) -> Self {
-        Self(Groups::build(prims, &()))
-    }
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        let tris = &self.0.tris;
-        let last_of_group = |h: &Hit| {
-            let pos = tris.iter().position(|(id, _)| *id == h.prim).unwrap_or(0);
-            pos % GROUP == GROUP - 1 || pos + 1 == tris.len()
-        };
-        self.0
-            .intersect_with(ray, stats)
-            .filter(|h| !last_of_group(h))
-    }
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.intersect_with(ray, stats).is_some()
-    }
-    fn bounds(&self) -> rt_core::Aabb {
-        self.0.bounds()
-    }
-    fn ball_query<Q: rt_core::BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
-        self.0.ball_query(query, stats);
-    }
-    fn memory_bytes(&self) -> usize {
-        self.0.memory_bytes()
-    }
-    fn build_stats(&self) -> BuildStats {
-        self.0.build_stats()
-    }
-}
-
 #[test]
-fn grading_writes_every_check_and_the_first_failing_ray() {
-    let dir = std::env::temp_dir().join(format!("rt-shootout-grade-{}", std::process::id()));
-    let shootout = rt_shootout::Shootout::new()
-        .with_triangles::<Groups>()
-        .with_triangles::<DropsLast>();
-    let args = |row: &str| {
-        rt_shootout::args_from([
-            "--grade",
-            row,
-            "--scene",
-            "random-soup",
-            "--structures",
-            "bvh",
-            "--width",
-            "32",
-            "--height",
-            "24",
-            "--repeats",
-            "1",
-            "--out",
-            dir.to_str().unwrap(),
-        ])
-        .unwrap()
-    };
-    let md = shootout.grade(&args("groups")).unwrap();
-    let text = std::fs::read_to_string(&md).unwrap();
-    // Every fixed scene, and the random scenes.
-    let checks = rt_conformance::SCENES.len() + 1;
+fn kit_scenes_replay_in_compare_and_explain_on_an_added_row() {
+    let shootout = rt_shootout::Shootout::new().with_triangles::<Groups>();
+    // `--scene kit:NAME` is the kit's scene with the kit's own rays.
+    let args = rt_shootout::args_from([
+        "--scene",
+        "kit:lattice",
+        "--structures",
+        "groups",
+        "--repeats",
+        "1",
+    ])
+    .unwrap();
+    let reports = shootout.run(&args).unwrap();
+    let lattice = rt_conformance::scene("lattice");
+    assert_eq!(
+        (
+            reports[0].ray_kind,
+            reports[0].rays,
+            reports[0].total_mismatches()
+        ),
+        ("kit", lattice.rays.len(), 0),
+        "compare on kit:lattice traces the kit's rays"
+    );
+    let err = shootout
+        .run(&rt_shootout::args_from(["--scene", "kit:nope"]).unwrap())
+        .unwrap_err();
     assert!(
-        text.contains(&format!("{checks} of {checks} checks passed")),
+        err.contains("no conformance kit scene named `nope`") && err.contains("lattice"),
+        "{err}"
+    );
+    // `explain` walks an added row on a kit scene; a row that reports no steps says so.
+    let ray = lattice.rays[3];
+    let explain = rt_shootout::explain::ExplainArgs {
+        structures: vec!["groups".into()],
+        scene: "kit:lattice".into(),
+        ray: Some(ray.to_line()),
+        pixel: None,
+        width: 64,
+        height: 48,
+        any: false,
+        max_steps: 400,
+    };
+    let text = rt_shootout::explain::explain(&explain, shootout.entries()).unwrap();
+    assert!(
+        text.contains("groups on kit:lattice")
+            && text.contains("groups reports no steps, only the counts below")
+            && text.contains("brute force gives the same answer"),
         "{text}"
     );
-
-    shootout.grade(&args("drops-last")).unwrap();
-    let json: serde_json::Value =
-        serde_json::from_str(&std::fs::read_to_string(dir.join("grade.json")).unwrap()).unwrap();
-    assert_eq!(json["structure"], "drops-last");
-    let results = json["kit"]["results"].as_array().unwrap();
-    assert_eq!(results.len(), checks);
-    let one = results
-        .iter()
-        .find(|r| r["scene"] == "one_triangle")
-        .unwrap();
-    assert_eq!(one["passed"], false);
-    assert!(
-        one["failure"]
-            .as_str()
-            .unwrap()
-            .contains("Ray::with_interval("),
-        "{one}"
-    );
-    let random = results
-        .iter()
-        .find(|r| r["scene"] == "random_scenes")
-        .unwrap();
-    assert_eq!(random["passed"], false);
-    assert!(
-        random["failure"].as_str().unwrap().lines().count() <= 8,
-        "{random}"
-    );
-    // The shootout ran against the reference row, and found the same bug on the soup.
-    let rows = json["shootout"][0]["rows"].as_array().unwrap();
-    let names: Vec<&str> = rows
-        .iter()
-        .map(|r| r["structure"].as_str().unwrap())
-        .collect();
-    assert_eq!(names, ["brute-force", "drops-last", "bvh"]);
-    assert!(rows[1]["mismatches"].as_u64().unwrap() > 0);
-    std::fs::remove_dir_all(&dir).ok();
 }

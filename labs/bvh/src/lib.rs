@@ -50,6 +50,15 @@ pub const SAH_DEPTH: usize = 24;
 /// it saves.
 pub const MAX_SPREAD: f32 = 1.0;
 
+/// The point that stands for a triangle where the builder sorts and bins triangles: the centre
+/// of its box. `rt-bvh`'s builder takes the same point, so the median split here and its
+/// `bvh-median` row make the same tree. (The vertices' mean, [`Primitive::centroid`], is the
+/// other common choice: it moves long thin triangles to other sides of a split, and so makes a
+/// different tree with different figures.)
+pub fn centroid(t: &Triangle) -> rt_core::glam::Vec3 {
+    t.bounds().center()
+}
+
 /// How the builder chooses where to split a node's triangles.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Split {
@@ -354,7 +363,12 @@ impl Accel for LabBvh {
     }
 
     fn build(prims: &[Triangle], params: &BvhParams) -> Self {
-        step2::build(prims, params)
+        let mut bvh = step2::build(prims, params);
+        // A vector that grew by doubling may hold up to twice what it uses: the tree keeps only
+        // its nodes and ids, so that its memory figure counts those.
+        bvh.nodes.shrink_to_fit();
+        bvh.ids.shrink_to_fit();
+        bvh
     }
 
     fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {

@@ -41,10 +41,14 @@ fn step_1_bounds_hold_the_triangles_and_their_centroids() {
     let want_b = ids
         .iter()
         .fold(Aabb::EMPTY, |b, &i| b.union(tris[i as usize].bounds()));
-    let want_c = ids
-        .iter()
-        .fold(Aabb::EMPTY, |b, &i| b.grow(tris[i as usize].centroid()));
-    assert_eq!((b, c), (want_b, want_c));
+    let want_c = ids.iter().fold(Aabb::EMPTY, |b, &i| {
+        b.grow(lab_bvh::centroid(&tris[i as usize]))
+    });
+    assert_eq!(
+        (b, c),
+        (want_b, want_c),
+        "(box of the triangles, box of their centroids) for every third of 100 small triangles"
+    );
     assert!(
         b.contains(&c),
         "the centroids lie inside the triangles' box"
@@ -58,11 +62,21 @@ fn step_1_entry_handles_the_corner_cases() {
     let b = Aabb::new(Vec3::ZERO, Vec3::ONE);
     let inf = f32::INFINITY;
     let along_x = Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::X);
-    assert_eq!(step1::entry(&b, &along_x, inf), 1.0);
+    assert_eq!(
+        step1::entry(&b, &along_x, inf),
+        1.0,
+        "ray {} runs along +x into the unit box: it enters at t = 1",
+        along_x.to_line()
+    );
     assert_eq!(step1::entry(&b, &along_x, 0.5), inf, "t_max before the box");
     assert_eq!(step1::entry(&b, &along_x, 1.0), 1.0, "t_max on the face");
     let backwards = Ray::new(Vec3::new(2.0, 0.5, 0.5), -Vec3::X);
-    assert_eq!(step1::entry(&b, &backwards, inf), 1.0);
+    assert_eq!(
+        step1::entry(&b, &backwards, inf),
+        1.0,
+        "ray {} runs along -x into the unit box: it enters at t = 1 (a negative direction meets the max plane first: swap the slab's planes)",
+        backwards.to_line()
+    );
     let behind = Ray::new(Vec3::new(2.0, 0.5, 0.5), Vec3::X);
     assert_eq!(step1::entry(&b, &behind, inf), inf, "box behind the ray");
     let inside = Ray::with_interval(Vec3::splat(0.5), Vec3::Y, 0.25, inf);
@@ -73,16 +87,31 @@ fn step_1_entry_handles_the_corner_cases() {
     );
     // In the face plane x = 0 with a direction of -0.0 along x: inside the closed box.
     let in_face = Ray::new(Vec3::new(0.0, -1.0, 0.5), Vec3::new(-0.0, 1.0, 0.0));
-    assert_eq!(step1::entry(&b, &in_face, inf), 1.0);
+    assert_eq!(
+        step1::entry(&b, &in_face, inf),
+        1.0,
+        "ray {} lies in the face plane x = 0 with a direction of -0.0 along x: inside the closed box, it enters at t = 1 (0 × ∞ is NaN: that axis must not narrow the interval)",
+        in_face.to_line()
+    );
     // Parallel to a slab and outside it: a miss, whatever the sign of the zero.
     for zero in [0.0, -0.0] {
         let outside = Ray::new(Vec3::new(2.0, -1.0, 0.5), Vec3::new(zero, 1.0, 0.0));
-        assert_eq!(step1::entry(&b, &outside, inf), inf);
+        assert_eq!(
+            step1::entry(&b, &outside, inf),
+            inf,
+            "ray {} runs parallel to the x slab, outside it: a miss (infinity)",
+            outside.to_line()
+        );
     }
     // A flat box, like the box of one triangle in the plane z = 0, is still hit.
     let flat = Aabb::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0));
     let down = Ray::new(Vec3::new(0.5, 0.5, 1.0), -Vec3::Z);
-    assert_eq!(step1::entry(&flat, &down, inf), 1.0);
+    assert_eq!(
+        step1::entry(&flat, &down, inf),
+        1.0,
+        "ray {} goes down onto a flat box (zero thickness in z): it enters at t = 1",
+        down.to_line()
+    );
 }
 
 #[test]
@@ -113,13 +142,20 @@ fn step_2_median_split_halves_along_the_widest_axis() {
         .collect();
     let mut ids: Vec<u32> = (0..101).collect();
     let (_, centroids) = step1::bounds(&tris, &ids);
-    assert_eq!(centroids.largest_axis(), 1);
+    assert_eq!(
+        centroids.largest_axis(),
+        1,
+        "the centroids spread most along y"
+    );
     let mid = step2::median_split(&tris, &mut ids, &centroids);
-    assert_eq!(mid, 50);
+    assert_eq!(
+        mid, 50,
+        "101 triangles split at the median: 50 to the first child"
+    );
     let mut sorted = ids.clone();
     sorted.sort();
     assert_eq!(sorted, (0..101).collect::<Vec<_>>(), "ids only reordered");
-    let y = |i: &u32| tris[*i as usize].centroid().y;
+    let y = |i: &u32| lab_bvh::centroid(&tris[*i as usize]).y;
     let left = ids[..mid].iter().map(y).fold(f32::MIN, f32::max);
     let right = ids[mid..].iter().map(y).fold(f32::MAX, f32::min);
     assert!(
@@ -242,12 +278,16 @@ fn step_3_order_depends_on_the_ray_and_on_t_max() {
     let from_west = Ray::new(Vec3::new(-10.0, 0.2, 0.2), Vec3::X);
     assert_eq!(
         step3::order(&bvh, 0, &from_west, f32::INFINITY),
-        [(west, 5.0), (east, 15.0)]
+        [(west, 5.0), (east, 15.0)],
+        "ray {} from the west: the west child first, entered at t = 5, then the east one at t = 15",
+        from_west.to_line()
     );
     let from_east = Ray::new(Vec3::new(10.0, 0.2, 0.2), -Vec3::X);
     assert_eq!(
         step3::order(&bvh, 0, &from_east, f32::INFINITY),
-        [(east, 5.0), (west, 15.0)]
+        [(east, 5.0), (west, 15.0)],
+        "ray {} from the east: the east child first, entered at t = 5, then the west one at t = 15",
+        from_east.to_line()
     );
     let short = step3::order(&bvh, 0, &from_east, 10.0);
     assert_eq!(
@@ -329,9 +369,15 @@ fn step_5_any_hit_stops_at_the_first_hit() {
         let ray = Ray::new(Vec3::new(-0.5 + i as f32 * 0.01, 0.3, 5.0), -Vec3::Z);
         assert_eq!(
             bvh.intersect_with(&ray, &mut closest).map(|h| h.prim),
-            Some(0)
+            Some(0),
+            "ray {} hits 64 copies of one triangle at the same t: the tie goes to the smallest index, 0",
+            ray.to_line()
         );
-        assert!(bvh.occluded_with(&ray, &mut any));
+        assert!(
+            bvh.occluded_with(&ray, &mut any),
+            "ray {} must be blocked by the 64 copies (any hit)",
+            ray.to_line()
+        );
     }
     assert_eq!(closest.prim_tests, 6400, "the closest hit tests every copy");
     assert!(
@@ -392,14 +438,16 @@ fn step_6_sah_makes_a_leaf_where_splitting_costs_more() {
     let (bounds, centroids) = step1::bounds(&tris, &ids);
     assert_eq!(
         step6::sah_split(&tris, &mut ids, &bounds, &centroids, 8),
-        None
+        None,
+        "four nearly identical triangles: every split costs more than a leaf of 4 (leaf size 8), so None"
     );
     // All centroids in one point: no plane has triangles on both sides.
     let mut ids = vec![0, 1, 2];
     let (bounds, centroids) = step1::bounds(&tris, &ids);
     assert_eq!(
         step6::sah_split(&tris, &mut ids, &bounds, &centroids, 2),
-        None
+        None,
+        "three triangles with one centroid: no plane puts triangles on both sides, so None"
     );
     // Two triangles far apart: splitting them is cheaper than testing both.
     let far = [tri, Triangle::new(tri.v0 + 9.0, tri.v1 + 9.0, tri.v2 + 9.0)];
@@ -407,7 +455,8 @@ fn step_6_sah_makes_a_leaf_where_splitting_costs_more() {
     let (bounds, centroids) = step1::bounds(&far, &ids);
     assert_eq!(
         step6::sah_split(&far, &mut ids, &bounds, &centroids, 8),
-        Some(1)
+        Some(1),
+        "two triangles far apart: split them, one to each side"
     );
     assert_eq!(ids, [0, 1], "the triangle left of the plane comes first");
 }
@@ -420,7 +469,11 @@ fn step_6_sah_beats_the_median_split_on_the_teapot_in_a_stadium() {
     if let Err(e) = sah.validate() {
         panic!("invalid tree: {e}");
     }
-    assert!(leaves(&sah).all(|l| l.count as usize <= BvhParams::sah().leaf_size));
+    assert!(
+        leaves(&sah).all(|l| l.count as usize <= BvhParams::sah().leaf_size),
+        "every SAH leaf holds at most the leaf size ({}) triangles",
+        BvhParams::sah().leaf_size
+    );
     let median = LabBvh::build(&tris, &BvhParams::default());
     // The reference solution's trees cost 18.7 and 48.2 (the shootout prints them as
     // `sah_cost`); 0.7 leaves room for other binnings and tie-breaks.
@@ -476,7 +529,10 @@ fn step_7_enter_takes_every_lane_that_enters() {
     };
     let mut lanes = Lanes::new(b);
     let all = b.all_lanes();
-    assert_eq!(all, 0xff);
+    assert_eq!(
+        all, 0xff,
+        "eight lanes: all_lanes() has the low eight bits set"
+    );
     // The first lane enters: it takes the whole packet along.
     let first = aabb([-0.5, 0.0, 0.0], [0.5, 1.0, 1.0]);
     assert_eq!(step7::enter(b, &lanes, &first, all), all, "test 1");
@@ -503,11 +559,13 @@ fn step_7_enter_takes_every_lane_that_enters() {
     // Boxes no lane enters: beside the rays, behind their origins.
     assert_eq!(
         step7::enter(b, &lanes, &aabb([20.0, 0.0, 0.0], [21.0, 1.0, 1.0]), all),
-        0
+        0,
+        "a box beside every ray: no lane enters"
     );
     assert_eq!(
         step7::enter(b, &lanes, &aabb([-1.0, 0.0, -9.0], [8.0, 1.0, -6.0]), all),
-        0
+        0,
+        "a box behind every ray's origin: no lane enters"
     );
     // Beyond each lane's best hit: a sheet at z = 0 hit by every lane hides a box behind it.
     let sheet = Triangle::new(
@@ -528,7 +586,8 @@ fn step_7_enter_takes_every_lane_that_enters() {
     );
     assert_eq!(
         step7::enter(b, &lanes, &aabb([-1.0, 0.0, -1.0], [8.0, 1.0, 3.0]), all),
-        all
+        all,
+        "a box each lane enters before its hit: every lane enters"
     );
 }
 

@@ -15,8 +15,15 @@ fn step_1_scene_bounds_ignore_invalid_triangles() {
         .iter()
         .filter(|t| t.is_valid())
         .fold(Aabb::EMPTY, |b, t| b.union(t.bounds()));
-    assert_eq!(step1::scene_bounds(&scene.triangles), expected);
-    assert!(step1::scene_bounds(&[]).is_empty());
+    assert_eq!(
+        step1::scene_bounds(&scene.triangles),
+        expected,
+        "the box around the kit scene `nan_vertex`'s valid triangles (the one with a NaN vertex left out)"
+    );
+    assert!(
+        step1::scene_bounds(&[]).is_empty(),
+        "no triangles: an empty box (Aabb::EMPTY)"
+    );
 }
 
 #[test]
@@ -25,7 +32,9 @@ fn step_1_slab_test_handles_the_corner_cases() {
     let along_x = Ray::new(Vec3::new(-1.0, 0.5, 0.5), Vec3::X);
     assert_eq!(
         step1::slab(&b, &along_x, f32::INFINITY).map(|t| t.0),
-        Some(1.0)
+        Some(1.0),
+        "ray {} runs along +x into the unit box: it enters at t = 1",
+        along_x.to_line()
     );
     let far = step1::slab(&b, &along_x, f32::INFINITY).unwrap().1;
     assert!((2.0..2.0001).contains(&far), "exit at {far}");
@@ -39,25 +48,36 @@ fn step_1_slab_test_handles_the_corner_cases() {
     let inside = Ray::new(Vec3::splat(0.5), Vec3::Y);
     assert_eq!(
         step1::slab(&b, &inside, f32::INFINITY).map(|t| t.0),
-        Some(0.0)
+        Some(0.0),
+        "ray {} starts inside the box: it enters at t_min = 0",
+        inside.to_line()
     );
     // In the face plane x = 0 with a direction of -0.0 along x: inside the closed box.
     let in_face = Ray::new(Vec3::new(0.0, -1.0, 0.5), Vec3::new(-0.0, 1.0, 0.0));
     assert_eq!(
         step1::slab(&b, &in_face, f32::INFINITY).map(|t| t.0),
-        Some(1.0)
+        Some(1.0),
+        "ray {} lies in the face plane x = 0 with a direction of -0.0 along x: inside the closed box, it enters at t = 1 (0 × ∞ is NaN: that axis must not narrow the interval)",
+        in_face.to_line()
     );
     // Parallel to a slab and outside it: a miss, whatever the sign of the zero.
     for zero in [0.0, -0.0] {
         let outside = Ray::new(Vec3::new(2.0, -1.0, 0.5), Vec3::new(zero, 1.0, 0.0));
-        assert_eq!(step1::slab(&b, &outside, f32::INFINITY), None);
+        assert_eq!(
+            step1::slab(&b, &outside, f32::INFINITY),
+            None,
+            "ray {} runs parallel to the x slab, outside it: a miss",
+            outside.to_line()
+        );
     }
     // A flat box is still hit.
     let flat = Aabb::new(Vec3::ZERO, Vec3::new(1.0, 1.0, 0.0));
     let down = Ray::new(Vec3::new(0.5, 0.5, 1.0), -Vec3::Z);
     assert_eq!(
         step1::slab(&flat, &down, f32::INFINITY).map(|t| t.0),
-        Some(1.0)
+        Some(1.0),
+        "ray {} goes down onto a flat box (zero thickness in z): it enters at t = 1",
+        down.to_line()
     );
 }
 
@@ -106,8 +126,16 @@ fn step_2_resolution_gives_about_density_times_n_near_cubic_cells() {
     let r = step2::resolution(&flat, 800, 2.0);
     assert_eq!(r[2], 1, "a flat axis gets one cell: {r:?}");
     assert!((1600..=3300).contains(&(r[0] * r[1])), "{r:?}");
-    assert_eq!(step2::resolution(&cube, 0, 2.0), [1, 1, 1]);
-    assert_eq!(step2::resolution(&Aabb::EMPTY, 10, 2.0), [1, 1, 1]);
+    assert_eq!(
+        step2::resolution(&cube, 0, 2.0),
+        [1, 1, 1],
+        "no triangles: one cell"
+    );
+    assert_eq!(
+        step2::resolution(&Aabb::EMPTY, 10, 2.0),
+        [1, 1, 1],
+        "an empty box: one cell"
+    );
     let huge = step2::resolution(&cube, 100_000_000, 2.0);
     assert!(
         huge.iter().all(|&n| (1..=step2::MAX_RES).contains(&n)),
@@ -262,8 +290,16 @@ fn step_5_any_hit_stops_at_the_first_hit() {
     let (mut closest, mut any) = (Counters::default(), Counters::default());
     for i in 0..100 {
         let ray = Ray::new(Vec3::new(-0.5 + i as f32 * 0.01, 0.3, 5.0), -Vec3::Z);
-        assert!(grid.intersect_with(&ray, &mut closest).is_some());
-        assert!(grid.occluded_with(&ray, &mut any));
+        assert!(
+            grid.intersect_with(&ray, &mut closest).is_some(),
+            "ray {} must hit the stack of sheets (closest hit)",
+            ray.to_line()
+        );
+        assert!(
+            grid.occluded_with(&ray, &mut any),
+            "ray {} must be blocked by the stack of sheets (any hit)",
+            ray.to_line()
+        );
     }
     assert!(
         any.prim_tests * 4 < closest.prim_tests,
@@ -279,7 +315,10 @@ fn step_6_mailbox_remembers_the_last_slots_ids() {
     assert!(!m.seen(3), "a new mailbox has seen nothing");
     assert!(m.seen(3), "the second time, 3 has been seen");
     for id in 100..100 + step6::SLOTS as u32 {
-        assert!(!m.seen(id));
+        assert!(
+            !m.seen(id),
+            "id {id} was never seen before, so seen({id}) is false"
+        );
     }
     assert!(!m.seen(3), "{} later ids have pushed 3 out", step6::SLOTS);
 }

@@ -36,7 +36,7 @@ fn soup_tree(seed: u64, n: usize) -> LabKdTree {
 fn step_1_plane_t_and_the_near_child() {
     let lab = soup_tree(1, 200);
     let root = lab.tree.nodes()[0];
-    assert!(!root.is_leaf());
+    assert!(!root.is_leaf(), "a tree over 200 triangles splits its root");
     let (a, s, first) = (root.axis(), root.split(), root.index());
     let point = |along: f32| {
         let mut p = Vec3::splat(0.1);
@@ -53,16 +53,31 @@ fn step_1_plane_t_and_the_near_child() {
         "t = {t}, expected {}",
         2.0 / up[a]
     );
-    assert_eq!(step1::near_far(&root, &from_below), (first, first + 1));
+    assert_eq!(
+        step1::near_far(&root, &from_below),
+        (first, first + 1),
+        "ray {} starts below the root's plane: the child below is near",
+        from_below.to_line()
+    );
     let from_above = Ray::new(point(s + 2.0), up);
     assert!(
         step1::plane_t(&root, &from_above) < 0.0,
         "the plane is behind"
     );
-    assert_eq!(step1::near_far(&root, &from_above), (first + 1, first));
+    assert_eq!(
+        step1::near_far(&root, &from_above),
+        (first + 1, first),
+        "ray {} starts above the root's plane: the child above is near",
+        from_above.to_line()
+    );
     // An origin in the plane: the direction decides.
     let in_plane_up = Ray::new(point(s), up);
-    assert_eq!(step1::plane_t(&root, &in_plane_up), 0.0);
+    assert_eq!(
+        step1::plane_t(&root, &in_plane_up),
+        0.0,
+        "ray {} starts in the plane: it crosses it at t = 0",
+        in_plane_up.to_line()
+    );
     assert_eq!(
         step1::near_far(&root, &in_plane_up),
         (first, first + 1),
@@ -77,13 +92,23 @@ fn step_1_plane_t_and_the_near_child() {
     // Parallel to the plane: never crossed, or NaN when lying in it.
     let mut flat = Vec3::ONE;
     flat[a] = 0.0;
-    assert!(step1::plane_t(&root, &Ray::new(point(s - 1.0), flat)).is_infinite());
-    assert!(step1::plane_t(&root, &Ray::new(point(s), flat)).is_nan());
+    assert!(
+        step1::plane_t(&root, &Ray::new(point(s - 1.0), flat)).is_infinite(),
+        "a ray parallel to the plane, below it, never crosses it: t is infinite"
+    );
+    assert!(
+        step1::plane_t(&root, &Ray::new(point(s), flat)).is_nan(),
+        "a ray lying in the plane: t is NaN (0 / 0)"
+    );
     flat[a] = -0.0;
-    assert!(step1::plane_t(&root, &Ray::new(point(s + 1.0), flat)).is_infinite());
+    assert!(
+        step1::plane_t(&root, &Ray::new(point(s + 1.0), flat)).is_infinite(),
+        "a ray parallel to the plane (direction -0.0 along its axis), above it: t is infinite"
+    );
     assert_eq!(
         step1::near_far(&root, &Ray::new(point(s + 1.0), flat)).0,
-        first + 1
+        first + 1,
+        "a ray parallel to the plane, above it: the child above is near"
     );
 }
 
@@ -107,7 +132,12 @@ fn step_1_the_near_child_holds_the_origin() {
             };
             assert_eq!(step1::near_far(node, &ray).0, want, "{}", ray.to_line());
             let t = step1::plane_t(node, &ray);
-            assert_eq!(ray.at(t)[node.axis()].is_finite(), t.is_finite());
+            assert_eq!(
+                ray.at(t)[node.axis()].is_finite(),
+                t.is_finite(),
+                "ray {}: plane_t {t} is finite exactly when the ray crosses the plane somewhere",
+                ray.to_line()
+            );
             if t.is_finite() && t.abs() < 100.0 {
                 let at = ray.at(t)[node.axis()];
                 assert!(
@@ -147,20 +177,35 @@ fn step_2_visit_covers_the_four_cases() {
             near: below,
             far: above,
             t: 2.0
-        }
+        },
+        "ray {} crosses the plane at t = 2 inside [1, 3]: both children, the one below first",
+        ray.to_line()
     );
     // Within rounding of either end: both children, so a triangle on the plane is not missed.
-    assert!(matches!(
-        step2::visit(&root, &ray, 0.0, 1.9999999),
-        Visit::Both { .. }
-    ));
-    assert!(matches!(
-        step2::visit(&root, &ray, 2.0000002, 3.0),
-        Visit::Both { .. }
-    ));
+    assert!(
+        matches!(
+            step2::visit(&root, &ray, 0.0, 1.9999999),
+            Visit::Both { .. }
+        ),
+        "ray {} on [0, 1.9999999]: the plane at t = 2 is within rounding of the end, so both children",
+        ray.to_line()
+    );
+    assert!(
+        matches!(
+            step2::visit(&root, &ray, 2.0000002, 3.0),
+            Visit::Both { .. }
+        ),
+        "ray {} on [2.0000002, 3]: the plane at t = 2 is within rounding of the start, so both children",
+        ray.to_line()
+    );
     // A plane behind the origin is never crossed.
     let back = Ray::new(o, -d);
-    assert_eq!(step2::visit(&root, &back, 0.0, 5.0), Visit::Near(below));
+    assert_eq!(
+        step2::visit(&root, &back, 0.0, 5.0),
+        Visit::Near(below),
+        "ray {} heads away from the plane: only the near child",
+        back.to_line()
+    );
     // An origin in the plane crosses it at t = 0: the side it comes from, then the other.
     let mut on = o;
     on[a] = s;
@@ -170,15 +215,19 @@ fn step_2_visit_covers_the_four_cases() {
             near: below,
             far: above,
             t: 0.0
-        }
+        },
+        "a ray from a point in the plane crosses it at t = 0: the side it comes from, then the other"
     );
     // Lying in the plane: both, over the whole interval.
     let mut in_plane = Vec3::ONE;
     in_plane[a] = 0.0;
-    assert!(matches!(
-        step2::visit(&root, &Ray::new(on, in_plane), 0.0, 5.0),
-        Visit::InPlane { .. }
-    ));
+    assert!(
+        matches!(
+            step2::visit(&root, &Ray::new(on, in_plane), 0.0, 5.0),
+            Visit::InPlane { .. }
+        ),
+        "a ray lying in the plane: both children over the whole interval (Visit::InPlane)"
+    );
 }
 
 #[test]
@@ -301,7 +350,11 @@ fn step_3_walk_counts_every_node_it_enters() {
         leaves += 1;
         f32::INFINITY
     });
-    assert!(leaves > 1);
+    assert!(
+        leaves > 1,
+        "ray {} crosses the soup: the walk reaches more than one leaf",
+        ray.to_line()
+    );
     assert!(
         stats.node_visits > leaves,
         "{} nodes entered for {leaves} leaves: interior nodes count too",
@@ -353,7 +406,10 @@ fn step_4_the_mailbox_skips_repeated_tests_and_changes_no_answer() {
     }));
     let with = LabKdTree::build(&tris, &KdLabParams::default());
     let without = LabKdTree::build(&tris, &LabKdTree::presets()[1].1);
-    assert!(without.params.no_mailbox);
+    assert!(
+        without.params.no_mailbox,
+        "the second preset turns the mailbox off"
+    );
     let (mut a, mut b) = (Counters::default(), Counters::default());
     for ray in rays_into_cube(10, 500) {
         let x = with.intersect_with(&ray, &mut a);
@@ -388,9 +444,15 @@ fn step_5_any_hit_stops_at_the_first_hit() {
         let ray = Ray::new(Vec3::new(-0.5 + i as f32 * 0.01, 0.3, 5.0), -Vec3::Z);
         assert_eq!(
             lab.intersect_with(&ray, &mut closest).map(|h| h.prim),
-            Some(0)
+            Some(0),
+            "ray {} hits 64 copies of one triangle at the same t: the tie goes to the smallest index, 0",
+            ray.to_line()
         );
-        assert!(lab.occluded_with(&ray, &mut any));
+        assert!(
+            lab.occluded_with(&ray, &mut any),
+            "ray {} must be blocked by the 64 copies (any hit)",
+            ray.to_line()
+        );
     }
     assert!(closest.prim_tests >= 6400, "{closest:?}");
     assert!(

@@ -90,6 +90,22 @@ pub struct Args {
     /// kdtree, grid), and write `grade.json` and `grade.md` into `--out DIR` (default `grade`).
     #[arg(long, value_name = "ROW")]
     pub grade: Option<String>,
+    /// With `--grade`: how long one build or query of the graded row may take before its check
+    /// calls it stuck (a loop that never ends?) and moves on.
+    #[arg(long, default_value_t = 5.0, value_name = "SECONDS")]
+    pub grade_stall: f64,
+    /// Grading runs each part of the kit, and the shootout, in a process of its own (so that a
+    /// panic, a loop or a stack overflow in the graded row costs one check, not the grade): this
+    /// is how the grade tells that process which part to run (a kit part's name, or `shootout`).
+    #[arg(long, hide = true, requires = "grade", value_name = "PART")]
+    pub grade_worker: Option<String>,
+    /// The kit scene (an index into the kit's scenes, then its random scenes) a grading worker
+    /// starts at, after an earlier worker of the same part stopped.
+    #[arg(long, hide = true, default_value_t = 0)]
+    pub grade_from: usize,
+    /// The flags as given (without the program's name), for grading to start its workers with.
+    #[arg(skip)]
+    pub flags: Vec<std::ffi::OsString>,
     /// Which query to measure: rays, closest points (nearest primitive to a point), box
     /// overlap (the primitives meeting a box), all hits along a ray, or hits through an alpha
     /// mask.

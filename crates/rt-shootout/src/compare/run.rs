@@ -464,6 +464,12 @@ pub(super) fn make_rays(
         let rays = raygen::read_rays_file(path).map_err(|e| e.to_string())?;
         return Ok((rays, "file", query));
     }
+    // A kit scene comes with the rays the kit checks it with, unless other rays are asked for.
+    if args.rays.is_none()
+        && let Some(kit) = crate::scene::kit_scene(&args.scene)?
+    {
+        return Ok((kit.rays, "kit", query));
+    }
     let bounds = &source.bounds;
     let camera = if source.field.is_some() {
         // A field lies flat on the ground: seen from above at 45°, it fills the picture.

@@ -12,24 +12,31 @@
 //! direction component gives infinite reciprocals (`ray.inv_dir()`); `-0.0` counts as negative;
 //! `0 × ∞` is NaN when the origin lies in a face plane, and such a ray is inside that slab
 //! (boxes are closed).
+//!
+//! Write the slab test yourself: rt-core's [`Aabb::intersect`] and [`Aabb::entry`] answer the
+//! same question (the step's tests compare your answers with theirs), so calling them skips the
+//! step. The rest of rt-core is yours to use: [`Ray::inv_dir`], [`Aabb::union`],
+//! [`Aabb::grow`], [`Primitive::bounds`], and [`crate::centroid`] from `lib.rs`.
 
 use rt_core::{Aabb, Primitive, Ray, SLAB_FAR_SCALE, Triangle};
 
 /// The box around the triangles `tris[id]` for `id` in `ids`, and the box around their
-/// centroids ([`Primitive::centroid`]). Both are [`Aabb::EMPTY`] when `ids` is empty.
+/// centroids ([`crate::centroid`]: the centre of each triangle's box). Both are [`Aabb::EMPTY`]
+/// when `ids` is empty.
 pub fn bounds(tris: &[Triangle], ids: &[u32]) -> (Aabb, Aabb) {
     // BEGIN SOLUTION step 1: the boxes around the triangles and around their centroids
     ids.iter().fold((Aabb::EMPTY, Aabb::EMPTY), |(b, c), &id| {
         let t = &tris[id as usize];
-        (b.union(t.bounds()), c.grow(t.centroid()))
+        (b.union(t.bounds()), c.grow(crate::centroid(t)))
     })
     // END SOLUTION
 }
 
 /// The distance at which the ray enters box `b`, if it meets the box within
 /// `[ray.t_min, t_max]`; `f32::INFINITY` if it does not. A ray starting inside the box enters
-/// it at `ray.t_min`. Make the far end of the interval a little generous (multiply it by
-/// `1.0 + 4.0 * f32::EPSILON`): rounding may put it a hair before a hit on the box's face.
+/// it at `ray.t_min`. Make the far end of the interval a little generous: compare the entry
+/// with the exit times [`SLAB_FAR_SCALE`] (rt-core's margin, `1 + 2⁻¹⁶`, which step 4 uses
+/// too), since rounding may put the exit a hair before a hit on the box's face.
 pub fn entry(b: &Aabb, ray: &Ray, t_max: f32) -> f32 {
     // BEGIN SOLUTION step 1: the entry distance
     let mut near = ray.t_min;

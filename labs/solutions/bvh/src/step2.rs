@@ -75,8 +75,8 @@ pub fn median_split(tris: &[Triangle], ids: &mut [u32], centroids: &Aabb) -> usi
     let axis = centroids.largest_axis();
     let mid = ids.len() / 2;
     ids.select_nth_unstable_by(mid, |&a, &b| {
-        let ca = tris[a as usize].centroid()[axis];
-        let cb = tris[b as usize].centroid()[axis];
+        let ca = crate::centroid(&tris[a as usize])[axis];
+        let cb = crate::centroid(&tris[b as usize])[axis];
         ca.total_cmp(&cb)
     });
     mid

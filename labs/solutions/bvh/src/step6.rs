@@ -40,7 +40,7 @@ pub fn sah_split(
     let bin = |id: u32, axis: usize| {
         let lo = centroids.min[axis];
         let scale = BINS as f32 / (centroids.max[axis] - lo);
-        let b = ((tris[id as usize].centroid()[axis] - lo) * scale) as usize;
+        let b = ((crate::centroid(&tris[id as usize])[axis] - lo) * scale) as usize;
         b.min(BINS - 1)
     };
     let area = bounds.half_area().max(f32::MIN_POSITIVE);

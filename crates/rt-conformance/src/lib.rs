@@ -34,6 +34,11 @@
 //! The kit never hangs: every case runs on a thread of its own under a watchdog, and a build or
 //! a query that does not return within [`STALL_LIMIT`], or that panics, fails the case with the
 //! ray it was on (see [`check_case`]).
+//!
+//! The checks come in parts ([`Part`]: closest hit, any hit, bundles, closest points, box
+//! overlap, all hits, inside); [`check_part`] and [`check_random_part`] run one part alone, so
+//! that a grade (`--grade` in the shootout) can show a structure's closest hit passing while its
+//! any hit is not written yet.
 
 use glam::Vec3;
 use proptest::prelude::*;

@@ -592,7 +592,12 @@ fn check_parts<A: Accel + 'static>(
             bundles::compare_bundles_probed(&accel, &rays, bundles_any, probe)
                 .map_err(|m| failed(&m))?;
         }
-        let points = scene_points(&prims, &rays);
+        // The points of the closest-point part, which the inside part samples too.
+        let points = if has(Part::ClosestPoints) || has(Part::Inside) {
+            scene_points(&prims, &rays)
+        } else {
+            Vec::new()
+        };
         if has(Part::ClosestPoints) {
             compare_points_probed(&accel, &reference, &points, probe).map_err(|m| failed(&m))?;
         }

@@ -989,3 +989,61 @@ fn a_saved_structure_that_answers_otherwise_or_trusts_its_file_fails_the_kit() {
 fn brute_force_saves_and_loads() {
     rt_conformance::check_saved_scenes::<BruteForce<Triangle>>();
 }
+
+/// Brute force whose any-hit query never finds a blocker: its closest hit is right, its any hit
+/// wrong on every ray that hits.
+struct NeverBlocked(BruteForce<Triangle>);
+
+impl Accel for NeverBlocked {
+    type Prim = Triangle;
+    type Params = ();
+    const NAME: &'static str = "never-blocked";
+    fn presets() -> Vec<(&'static str, ())> {
+        vec![("default", ())]
+    }
+    fn build(prims: &[Triangle], _: &()) -> Self {
+        Self(BruteForce::build(prims, &()))
+    }
+    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+        self.0.intersect_with(ray, stats)
+    }
+    fn occluded_with<S: Stats>(&self, _: &Ray, _: &mut S) -> bool {
+        false
+    }
+    fn bounds(&self) -> Aabb {
+        self.0.bounds()
+    }
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.ball_query(query, stats);
+    }
+    fn memory_bytes(&self) -> usize {
+        self.0.memory_bytes()
+    }
+    fn build_stats(&self) -> BuildStats {
+        self.0.build_stats()
+    }
+}
+
+/// The kit's parts are checked apart: a structure with a wrong any hit passes the closest-hit
+/// part and fails the any-hit part (naming the ray), on a fixed scene and on random scenes.
+#[test]
+fn parts_are_checked_apart() {
+    use rt_conformance::{Part, check_part, check_random_part};
+    let s = scene("one_triangle");
+    let part = |p| check_part::<NeverBlocked>(&(), &s.triangles, &s.rays, p, STALL_LIMIT);
+    assert!(part(Part::Closest).is_ok(), "{:?}", part(Part::Closest));
+    let any = part(Part::Any).expect_err("the any-hit part must fail");
+    assert!(
+        any.contains("occluded disagrees") && any.contains("rays-file line: "),
+        "{any}"
+    );
+    assert!(
+        check_random_part::<NeverBlocked>(&(), Part::Closest, STALL_LIMIT).is_ok(),
+        "random scenes, closest hit"
+    );
+    let random = check_random_part::<NeverBlocked>(&(), Part::Any, STALL_LIMIT)
+        .expect_err("the any-hit part fails on random scenes");
+    assert!(random.contains("occluded"), "{random}");
+    // All parts together fail too.
+    assert!(check_case_within::<NeverBlocked>(&(), &s.triangles, &s.rays, STALL_LIMIT).is_err());
+}

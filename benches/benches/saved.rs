@@ -15,12 +15,12 @@
 
 use rt_benches::{BenchScene, flag_values, shared};
 use rt_bvh::Bvh;
-use rt_core::persist::Persist;
 use rt_core::{Accel, Hit, Ray, Triangle};
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
 use rt_kdtree::KdTree;
 use rt_octree::Octree;
+use rt_persist::Persist;
 use rt_scene::scenes::{View, resolve};
 use std::time::Instant;
 

@@ -1,5 +1,5 @@
 //! How fast is a signed distance field, and how much faster than brute force? For every
-//! structure, the signed distance ([`Accel::signed_distance`]: the structure's closest point,
+//! structure, the signed distance (`rt_sdf::SignedDistance::signed_distance`: the structure's closest point,
 //! signed by the fast winding number of one shared [`WindingTree`]) at every sample of an
 //! `N × N × N` grid over the mesh's box grown by a tenth on every side, on all threads. Brute
 //! force (its closest point, signed by the exact winding number over every triangle) answers a
@@ -19,14 +19,12 @@
 use rayon::prelude::*;
 use rt_benches::{BenchScene, flag_values, shared};
 use rt_bvh::Bvh;
-use rt_core::{
-    Accel, BruteForce, DynAccel, PointHit, SignedPoint, Triangle, WindingTree, glam::Vec3,
-    winding_number_exact,
-};
+use rt_core::{Accel, BruteForce, DynAccel, PointHit, Triangle, glam::Vec3};
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
 use rt_kdtree::KdTree;
 use rt_octree::Octree;
+use rt_sdf::{SignedPoint, WindingTree, winding_number_exact};
 use std::time::Instant;
 
 /// Brute force answers every `STRIDE`-th sample.
@@ -124,7 +122,7 @@ fn main() {
         for (name, accel) in &rows {
             let one = |p: Vec3| {
                 let mut out = [None];
-                accel.signed_distances_all(&sign, &[(p, f32::INFINITY)], &mut out, None);
+                rt_sdf::signed_distances(&**accel, &sign, &[(p, f32::INFINITY)], &mut out, None);
                 out[0]
             };
             let (secs, _) = timed(&points, one);

@@ -11,7 +11,7 @@
 //! - a command `.ci/run` runs itself (`cargo xtask compare`, `cargo test --workspace`) is left
 //!   to CI.
 
-use std::collections::BTreeSet;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -345,5 +345,290 @@ fn the_slug_rule_matches_github() {
     assert_eq!(
         slug(" Dynamic scenes: `cargo xtask animate`"),
         "dynamic-scenes-cargo-xtask-animate"
+    );
+}
+
+/// The crates whose sources ARCHITECTURE.md lists: every directory under `crates/`, xtask and
+/// the benchmarks, each with the heading of its section.
+fn documented_crates() -> Vec<(String, PathBuf)> {
+    let root = root();
+    let mut crates: Vec<(String, PathBuf)> = std::fs::read_dir(root.join("crates"))
+        .expect("crates/")
+        .map(|e| e.expect("an entry of crates/").path())
+        .filter(|p| p.join("Cargo.toml").is_file())
+        .map(|p| (p.file_name().unwrap().to_string_lossy().into_owned(), p))
+        .collect();
+    crates.push(("xtask".into(), root.join("xtask")));
+    crates.push(("benches".into(), root.join("benches")));
+    crates.sort();
+    crates
+}
+
+/// Every `.rs` file under `dir`, as paths relative to it with `/` between components.
+fn rust_files(dir: &Path) -> BTreeSet<String> {
+    let mut out = BTreeSet::new();
+    let mut todo = vec![dir.to_path_buf()];
+    while let Some(d) = todo.pop() {
+        for e in std::fs::read_dir(&d).unwrap_or_else(|e| panic!("{}: {e}", d.display())) {
+            let p = e.expect("a directory entry").path();
+            if p.is_dir() {
+                todo.push(p);
+            } else if p.extension().is_some_and(|x| x == "rs") {
+                let rel = p.strip_prefix(dir).expect("below the directory");
+                let parts: Vec<String> = rel
+                    .components()
+                    .map(|c| c.as_os_str().to_string_lossy().into_owned())
+                    .collect();
+                out.insert(parts.join("/"));
+            }
+        }
+    }
+    out
+}
+
+/// What is wrong between `text` (ARCHITECTURE.md) and the sources: a crate's source file its
+/// section (`## name`) does not name, or a named file that does not exist.
+fn architecture_problems(text: &str) -> Vec<String> {
+    let root = root();
+    // The sections, by the first word of their heading.
+    let mut sections: Vec<(String, String)> = Vec::new();
+    for line in text.lines() {
+        if let Some(heading) = line.strip_prefix("## ") {
+            let name = heading.split_whitespace().next().unwrap_or("").to_string();
+            sections.push((name, String::new()));
+        } else if let Some((_, body)) = sections.last_mut() {
+            body.push_str(line);
+            body.push('\n');
+        }
+    }
+    let mut problems = Vec::new();
+    for (name, dir) in documented_crates() {
+        let Some(body) = sections
+            .iter()
+            .filter(|(s, _)| *s == name)
+            .map(|(_, b)| b.as_str())
+            .reduce(|_, b| b)
+        else {
+            problems.push(format!("no section `## {name}` for {}", dir.display()));
+            continue;
+        };
+        let src = dir.join("src");
+        let files = rust_files(&src);
+        let prefix = dir
+            .strip_prefix(&root)
+            .expect("below the root")
+            .to_string_lossy()
+            .replace('\\', "/");
+        let mut named = BTreeSet::new();
+        // Every `…rs` between backticks: a path below the crate's `src/` (`traverse.rs`,
+        // `builder/reinsert.rs`), below the crate (`tests/…`, `examples/…`, `benches/…`), or
+        // below the repository (`crates/…`, `xtask/…`).
+        for token in body.split('`').skip(1).step_by(2) {
+            if !token.ends_with(".rs") || token.contains(char::is_whitespace) || token.contains('*')
+            {
+                continue;
+            }
+            let first = token.split('/').next().unwrap_or("");
+            let path = if ["crates", "xtask", "benches", "labs", "fuzz"].contains(&first)
+                && token.contains('/')
+            {
+                let from_root = root.join(token);
+                if let Some(rest) = token.strip_prefix(&format!("{prefix}/src/")) {
+                    named.insert(rest.to_string());
+                }
+                from_root
+            } else if ["tests", "examples", "benches", "src"].contains(&first) {
+                if let Some(rest) = token.strip_prefix("src/") {
+                    named.insert(rest.to_string());
+                }
+                dir.join(token)
+            } else {
+                named.insert(token.to_string());
+                src.join(token)
+            };
+            if !path.is_file() {
+                problems.push(format!("## {name} names `{token}`, which does not exist"));
+            }
+        }
+        for f in files.difference(&named) {
+            problems.push(format!("## {name} does not name {prefix}/src/{f}"));
+        }
+    }
+    problems
+}
+
+/// ARCHITECTURE.md names every source file of every crate in that crate's section, and every
+/// file it names exists: a file added, moved or removed without the page following fails here,
+/// naming it.
+#[test]
+fn the_architecture_names_every_source_file() {
+    let text = std::fs::read_to_string(root().join("ARCHITECTURE.md")).expect("ARCHITECTURE.md");
+    let problems = architecture_problems(&text);
+    assert!(
+        problems.is_empty(),
+        "ARCHITECTURE.md and the sources disagree:\n{}",
+        problems.join("\n")
+    );
+}
+
+/// The check fails a page that forgets a file or names one that is gone.
+#[test]
+fn the_architecture_check_finds_a_missing_and_a_stale_file() {
+    let text = std::fs::read_to_string(root().join("ARCHITECTURE.md")).expect("ARCHITECTURE.md");
+    let doctored = text
+        .replace("`watertight.rs`", "the watertight kernel")
+        .replace("`slab.rs`", "`slab_old.rs`");
+    let problems = architecture_problems(&doctored);
+    assert!(
+        problems
+            .iter()
+            .any(|p| p.contains("does not name crates/rt-simd/src/watertight.rs")),
+        "{problems:?}"
+    );
+    assert!(
+        problems
+            .iter()
+            .any(|p| p.contains("names `slab_old.rs`, which does not exist")),
+        "{problems:?}"
+    );
+}
+
+/// The modules of one flat crate `src` directory and the sibling modules each one's code (not
+/// its comments, not its `#[cfg(test)]` part) names: through `crate::module`, `super::module`,
+/// or an item the crate root re-exports from that module (`crate::Hit`, `crate::{Ray, Aabb}`).
+fn module_imports(sources: &BTreeMap<String, String>) -> BTreeMap<String, BTreeSet<String>> {
+    let modules: BTreeSet<String> = sources.keys().filter(|m| *m != "lib").cloned().collect();
+    let ident = |s: &str| -> String {
+        s.chars()
+            .take_while(|c| c.is_alphanumeric() || *c == '_')
+            .collect()
+    };
+    // `pub use module::{A, B};` and `pub use module::A;` in lib.rs: item -> module.
+    let mut home = BTreeMap::new();
+    let lib = sources.get("lib").map(String::as_str).unwrap_or("");
+    for stmt in lib.split("pub use ").skip(1) {
+        let stmt = stmt.split(';').next().unwrap_or("");
+        let Some((module, items)) = stmt.split_once("::") else {
+            continue;
+        };
+        if modules.contains(module) {
+            for item in items.split(|c: char| !(c.is_alphanumeric() || c == '_')) {
+                if !item.is_empty() {
+                    home.insert(item.to_string(), module.to_string());
+                }
+            }
+        }
+    }
+    let mut graph = BTreeMap::new();
+    for m in &modules {
+        let text = &sources[m];
+        let code: String = text
+            .split("#[cfg(test)]")
+            .next()
+            .unwrap_or("")
+            .lines()
+            .filter(|l| !l.trim_start().starts_with("//"))
+            .collect::<Vec<_>>()
+            .join("\n")
+            .replace("$crate", "");
+        let mut names = Vec::new();
+        for prefix in ["crate::", "super::"] {
+            for rest in code.split(prefix).skip(1) {
+                if let Some(group) = rest.strip_prefix('{') {
+                    let group = group.split('}').next().unwrap_or("");
+                    names.extend(
+                        group
+                            .split(|c: char| !(c.is_alphanumeric() || c == '_'))
+                            .map(String::from),
+                    );
+                } else {
+                    names.push(ident(rest));
+                }
+            }
+        }
+        let deps: BTreeSet<String> = names
+            .iter()
+            .filter_map(|n| {
+                if modules.contains(n) {
+                    Some(n.clone())
+                } else {
+                    home.get(n).cloned()
+                }
+            })
+            .filter(|d| d != m)
+            .collect();
+        graph.insert(m.clone(), deps);
+    }
+    graph
+}
+
+/// A circle of imports in `graph`, as the modules around it (`a -> b -> a`), if there is one.
+fn import_circle(graph: &BTreeMap<String, BTreeSet<String>>) -> Option<String> {
+    // Depth-first, with the path so far: reaching a module on the path closes a circle.
+    fn visit(
+        m: &str,
+        graph: &BTreeMap<String, BTreeSet<String>>,
+        path: &mut Vec<String>,
+        done: &mut BTreeSet<String>,
+    ) -> Option<String> {
+        if let Some(at) = path.iter().position(|p| p == m) {
+            let mut circle = path[at..].to_vec();
+            circle.push(m.to_string());
+            return Some(circle.join(" -> "));
+        }
+        if !done.insert(m.to_string()) {
+            return None;
+        }
+        path.push(m.to_string());
+        for d in graph.get(m).into_iter().flatten() {
+            if let Some(c) = visit(d, graph, path, done) {
+                return Some(c);
+            }
+        }
+        path.pop();
+        None
+    }
+    let mut done = BTreeSet::new();
+    graph
+        .keys()
+        .find_map(|m| visit(m, graph, &mut Vec::new(), &mut done))
+}
+
+/// rt-core's sources, by module name.
+fn rt_core_sources() -> BTreeMap<String, String> {
+    let src = root().join("crates/rt-core/src");
+    rust_files(&src)
+        .into_iter()
+        .map(|f| {
+            let text = std::fs::read_to_string(src.join(&f)).expect("a source of rt-core");
+            (f.trim_end_matches(".rs").to_string(), text)
+        })
+        .collect()
+}
+
+/// rt-core's modules import each other in layers (ARCHITECTURE.md, "## rt-core"): a reader can
+/// start from the bottom, and no change brings back a circle like the one the SIMD lanes, the
+/// bundles and the kernels once made.
+#[test]
+fn rt_core_modules_import_in_layers() {
+    let graph = module_imports(&rt_core_sources());
+    assert!(
+        graph.len() > 20,
+        "rt-core's modules were not read: {graph:?}"
+    );
+    assert_eq!(import_circle(&graph), None);
+}
+
+/// The check finds a circle made through a re-exported item, as `Hit` in `accel.rs` once made
+/// one with `query.rs`.
+#[test]
+fn the_layer_check_finds_a_circle() {
+    let mut sources = rt_core_sources();
+    let hit = sources.get_mut("hit").expect("hit.rs");
+    hit.insert_str(0, "use crate::{Accel, Ray};\n");
+    let circle = import_circle(&module_imports(&sources)).expect("a circle through hit.rs");
+    assert!(
+        circle.contains("hit") && circle.contains("accel"),
+        "{circle}"
     );
 }

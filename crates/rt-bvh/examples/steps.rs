@@ -13,13 +13,18 @@
 //! filled`). The passes of all configurations are interleaved and the median pass is reported;
 //! every configuration must answer exactly like the first.
 
-use rt_bvh::{Ablation, Bvh, BvhParams, Kernels};
+use rt_bvh::{Ablation, Bvh, BvhParams, Isa, Kernels};
 use rt_core::{Accel, Hit, Primitive, Ray, Triangle};
 use rt_scene::raygen::{self, RayKind};
 use rt_scene::scenes;
 use std::time::Instant;
 
 /// The configurations, each with one more step than the one before.
+/// The kernels of an instruction set this CPU may lack (then the portable ones).
+fn simd(isa: Option<Isa>) -> Kernels {
+    Kernels::Simd(isa.unwrap_or(Isa::Portable))
+}
+
 fn steps() -> Vec<(&'static str, BvhParams)> {
     let wide = |kernels, sort_children, any_hit_path| BvhParams {
         kernels,
@@ -37,15 +42,15 @@ fn steps() -> Vec<(&'static str, BvhParams)> {
         ),
         (
             "+ SoA triangle packs, four per test (plain arrays)",
-            wide(Some(Kernels::Portable), false, false),
+            wide(Some(Kernels::Simd(Isa::Portable)), false, false),
         ),
         (
             "+ SSE2 intrinsics (x86-64 baseline)",
-            wide(Some(Kernels::Sse2), false, false),
+            wide(Some(simd(Isa::sse2())), false, false),
         ),
         (
             "+ AVX2 intrinsics (runtime dispatch)",
-            wide(Some(Kernels::Avx2), false, false),
+            wide(Some(simd(Isa::avx2())), false, false),
         ),
         (
             "+ nearest-first order of the children",

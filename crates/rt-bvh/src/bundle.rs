@@ -21,17 +21,18 @@
 //!   decides.
 //!
 //! So every lane tests a superset of the primitives its single ray tests (the interval test is
-//! conservative, see [`rt_core::Bundle::may_enter`], and the lane tests are the single ray's),
+//! conservative, see [`rt_simd::Bundle::may_enter`], and the lane tests are the single ray's),
 //! each with the single ray's arithmetic, and keeps the best by the same tie rule: its answer is
 //! the single ray's, bit for bit.
 
-use crate::kernels::Simd;
+use crate::kernels::Wide;
 use crate::node::{ChildRef, Node, WIDTH, WideNode};
 use crate::traverse::{Leaves, WIDE_STACK};
 use crate::{Items, MAX_DEPTH};
 use rt_core::Stack;
-use rt_core::bundle::{Bundle, Lanes, narrow};
-use rt_core::{BUNDLE_LANES, Primitive, SLAB_FAR_SCALE, Stats};
+use rt_core::{Primitive, SLAB_FAR_SCALE, Stats};
+use rt_simd::bundle::narrow;
+use rt_simd::{BUNDLE_LANES, Bundle, Lanes, Simd, WithLanes};
 
 /// The most the lanes' directions may spread ([`Bundle::direction_spread`], about radians) for
 /// the bundle to walk together; wider bundles go singly.
@@ -55,7 +56,7 @@ const GROUPS: usize = BUNDLE_LANES / 8;
 /// the children, this is [`Bundle::may_enter`] (the same operations; see there why it is
 /// conservative).
 #[inline(always)]
-fn interval8<X: Simd>(
+fn interval8<X: Simd<8>>(
     s: X,
     node: &WideNode,
     b: &Bundle,
@@ -63,49 +64,49 @@ fn interval8<X: Simd>(
     one_origin: bool,
 ) -> (u32, [f32; WIDTH]) {
     let lb = b.lane_bounds();
-    let mut t0 = s.splat8(lb.t_min_lo);
-    let mut t1 = s.splat8(t_hi);
+    let mut t0 = s.splat(lb.t_min_lo);
+    let mut t1 = s.splat(t_hi);
     for a in 0..3 {
         let negative = b.octant() >> a & 1 != 0;
         let (near, far) = if negative { (a + 3, a) } else { (a, a + 3) };
-        let (lo, hi) = (s.splat8(lb.inv_dir_lo[a]), s.splat8(lb.inv_dir_hi[a]));
-        let (o_lo, o_hi) = (s.splat8(lb.origin_lo[a]), s.splat8(lb.origin_hi[a]));
-        let near = s.load8(&node.bounds[near]);
-        let far = s.load8(&node.bounds[far]);
+        let (lo, hi) = (s.splat(lb.inv_dir_lo[a]), s.splat(lb.inv_dir_hi[a]));
+        let (o_lo, o_hi) = (s.splat(lb.origin_lo[a]), s.splat(lb.origin_hi[a]));
+        let near = s.load(&node.bounds[near]);
+        let far = s.load(&node.bounds[far]);
         if one_origin {
             // The lanes' origins are one point, so `near - o_lo` and `near - o_hi` are the
             // same numbers and half the products below repeat: the same bounds.
             // PERF: close views, private harness, one thread, medians of five alternating
             // runs, Mrays/s: the sphereflake 38.0 -> 38.2, the bunny 42.2 -> 42.2, the teapot
             // 62.4 -> 63.0, the teapot in a stadium 68.8 -> 70.7.
-            let n = s.sub8(near, o_lo);
-            let f = s.sub8(far, o_lo);
-            t0 = s.max8(s.min8(s.mul8(n, lo), s.mul8(n, hi)), t0);
-            t1 = s.min8(s.max8(s.mul8(f, lo), s.mul8(f, hi)), t1);
+            let n = s.sub(near, o_lo);
+            let f = s.sub(far, o_lo);
+            t0 = s.max(s.min(s.mul(n, lo), s.mul(n, hi)), t0);
+            t1 = s.min(s.max(s.mul(f, lo), s.mul(f, hi)), t1);
             continue;
         }
-        let (n0, n1) = (s.sub8(near, o_hi), s.sub8(near, o_lo));
-        let near_lo = s.min8(
-            s.min8(s.mul8(n0, lo), s.mul8(n0, hi)),
-            s.min8(s.mul8(n1, lo), s.mul8(n1, hi)),
+        let (n0, n1) = (s.sub(near, o_hi), s.sub(near, o_lo));
+        let near_lo = s.min(
+            s.min(s.mul(n0, lo), s.mul(n0, hi)),
+            s.min(s.mul(n1, lo), s.mul(n1, hi)),
         );
-        let (f0, f1) = (s.sub8(far, o_hi), s.sub8(far, o_lo));
-        let far_hi = s.max8(
-            s.max8(s.mul8(f0, lo), s.mul8(f0, hi)),
-            s.max8(s.mul8(f1, lo), s.mul8(f1, hi)),
+        let (f0, f1) = (s.sub(far, o_hi), s.sub(far, o_lo));
+        let far_hi = s.max(
+            s.max(s.mul(f0, lo), s.mul(f0, hi)),
+            s.max(s.mul(f1, lo), s.mul(f1, hi)),
         );
-        t0 = s.max8(near_lo, t0);
-        t1 = s.min8(far_hi, t1);
+        t0 = s.max(near_lo, t0);
+        t1 = s.min(far_hi, t1);
     }
-    let mask = s.le_bits8(t0, s.mul8(t1, s.splat8(SLAB_FAR_SCALE)));
-    (mask, s.store8(t0))
+    let mask = s.bits(s.le(t0, s.mul(t1, s.splat(SLAB_FAR_SCALE))));
+    (mask, s.store(t0))
 }
 
 /// For each child in `children`, the lanes of `active` that enter it: each lane's own slab test
 /// against its own best `t` (`t_max`), eight lanes per vector, the operations of
 /// [`slab8`](crate::kernels::slab8) in the same order.
 #[inline(always)]
-fn lanes_entering<X: Simd>(
+fn lanes_entering<X: Simd<8>>(
     s: X,
     node: &WideNode,
     children: u32,
@@ -131,8 +132,8 @@ fn lanes_entering<X: Simd>(
     // sphereflake 41.2 -> 42.4, the teapot in a stadium 75.6 -> 75.7.
     let lb = b.lane_bounds();
     let plane = |row: usize, a: usize| {
-        let d = s.sub8(s.load8(&node.bounds[row]), s.splat8(lb.origin_lo[a]));
-        s.store8(d)
+        let d = s.sub(s.load(&node.bounds[row]), s.splat(lb.origin_lo[a]));
+        s.store(d)
     };
     let (near_d, far_d) = if one_origin {
         (
@@ -155,7 +156,7 @@ fn lanes_entering<X: Simd>(
         if group == 0 {
             continue;
         }
-        let at = |v: &[f32; BUNDLE_LANES]| s.load8(&v.as_chunks::<8>().0[g]);
+        let at = |v: &[f32; BUNDLE_LANES]| s.load(&v.as_chunks::<8>().0[g]);
         let o = [at(&b.origin[0]), at(&b.origin[1]), at(&b.origin[2])];
         let inv = [at(&b.inv_dir[0]), at(&b.inv_dir[1]), at(&b.inv_dir[2])];
         let (t_min, t_max) = (at(&b.t_min), at(t_max));
@@ -168,20 +169,20 @@ fn lanes_entering<X: Simd>(
             for a in 0..3 {
                 let (tn, tf) = if one_origin {
                     (
-                        s.mul8(s.splat8(near_d[a][c]), inv[a]),
-                        s.mul8(s.splat8(far_d[a][c]), inv[a]),
+                        s.mul(s.splat(near_d[a][c]), inv[a]),
+                        s.mul(s.splat(far_d[a][c]), inv[a]),
                     )
                 } else {
                     let (near, far) = rows[a];
                     (
-                        s.mul8(s.sub8(s.splat8(node.bounds[near][c]), o[a]), inv[a]),
-                        s.mul8(s.sub8(s.splat8(node.bounds[far][c]), o[a]), inv[a]),
+                        s.mul(s.sub(s.splat(node.bounds[near][c]), o[a]), inv[a]),
+                        s.mul(s.sub(s.splat(node.bounds[far][c]), o[a]), inv[a]),
                     )
                 };
-                t0 = s.max8(tn, t0);
-                t1 = s.min8(tf, t1);
+                t0 = s.max(tn, t0);
+                t1 = s.min(tf, t1);
             }
-            let hit = s.le_bits8(t0, s.mul8(t1, s.splat8(SLAB_FAR_SCALE))) & group as u32;
+            let hit = s.bits(s.le(t0, s.mul(t1, s.splat(SLAB_FAR_SCALE)))) & group as u32;
             lanes[c] |= (hit as u64) << (8 * g);
         }
     }
@@ -199,10 +200,35 @@ fn leaf_children(node: &WideNode) -> u32 {
     leaves
 }
 
+/// One bundle through [`wide_bundle`] with an instruction set's operations
+/// ([`rt_simd::Isa::wide`] runs it inside a frame compiled for them).
+pub(crate) struct WideBundle<'a, 'b, L, S, const ANY: bool> {
+    pub nodes: &'a [WideNode],
+    pub leaves: &'a L,
+    pub bundle: &'a Bundle,
+    pub lanes: &'a mut Lanes<'b>,
+    pub stats: &'a mut S,
+}
+
+impl<L: Leaves, S: Stats, const ANY: bool> WithLanes for WideBundle<'_, '_, L, S, ANY> {
+    type Out = ();
+    #[inline(always)]
+    fn run<X: Simd<4> + Simd<8>>(self, simd: X) {
+        wide_bundle::<X, L, S, ANY>(
+            simd,
+            self.nodes,
+            self.leaves,
+            self.bundle,
+            self.lanes,
+            self.stats,
+        );
+    }
+}
+
 /// The bundle traversal core, shared by closest hit (`ANY = false`) and any hit (`ANY = true`):
 /// records each lane's hits in `lanes`.
 #[inline(always)]
-pub(crate) fn wide_bundle<X: Simd, L: Leaves, S: Stats, const ANY: bool>(
+pub(crate) fn wide_bundle<X: Wide, L: Leaves, S: Stats, const ANY: bool>(
     simd: X,
     nodes: &[WideNode],
     leaves: &L,

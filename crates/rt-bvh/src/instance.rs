@@ -2,9 +2,10 @@
 
 use crate::{Bvh, BvhParams, Layout, MAX_DEPTH};
 use rt_core::glam::Vec3;
-use rt_core::{
-    Aabb, Accel, Instance, InstanceHit, InstancePointHit, InstancePointQuery, InstanceTransform,
-    PrimHit, Primitive, Ray, SLAB_FAR_SCALE, Stack, Stats, TransformPrimitive, TwoLevel,
+use rt_core::{Aabb, Accel, PrimHit, Primitive, Ray, SLAB_FAR_SCALE, Stack, Stats};
+use rt_instance::{
+    Instance, InstanceHit, InstancePointHit, InstancePointQuery, InstanceTransform,
+    TransformPrimitive, TwoLevel,
 };
 
 /// A field of instances under one BVH: the top level of a two-level scene.
@@ -15,13 +16,14 @@ use rt_core::{
 /// levels can be any structure and may differ from instance to instance; one built structure
 /// can back any number of instances, since an [`Instance`] shares it through an `Arc`.
 ///
-/// It answers exactly as [`LinearInstances`](rt_core::LinearInstances) over the same instances
-/// (see [`rt_core::TwoLevel`] and the `instance` module of rt-core for what that means against
+/// It answers exactly as [`LinearInstances`](rt_instance::LinearInstances) over the same instances
+/// (see [`rt_instance::TwoLevel`] and the crate documentation of rt-instance for what that means against
 /// the flattened world-space triangles).
 ///
 /// ```
 /// use rt_bvh::{Bvh, Instances};
-/// use rt_core::{Accel, Instance, Ray, Triangle, TwoLevel, glam::{Affine3A, Vec3}};
+/// use rt_core::{Accel, Ray, Triangle, glam::{Affine3A, Vec3}};
+/// use rt_instance::{Instance, TwoLevel};
 /// use std::sync::Arc;
 /// let tri = [Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y)];
 /// let mesh = Arc::new(Bvh::build(&tri, &Default::default()));
@@ -98,7 +100,7 @@ impl<P: Primitive> TwoLevel<P> for Instances<P> {
             .map(|i| InstanceBox(i.world_bounds()))
             .collect();
         let top = Bvh::build(&boxes, &Self::top_params());
-        let (reach, condition) = rt_core::scene_margins(&instances);
+        let (reach, condition) = rt_instance::scene_margins(&instances);
         Self {
             bounds: top.bounds(),
             instances,
@@ -182,7 +184,7 @@ impl<P: Primitive> TwoLevel<P> for Instances<P> {
     }
 
     fn memory_bytes(&self) -> usize {
-        self.top_level_bytes() + rt_core::bottom_bytes(&self.instances)
+        self.top_level_bytes() + rt_instance::bottom_bytes(&self.instances)
     }
 }
 

@@ -74,17 +74,19 @@
 //! of [`Accel`] (NaN, an origin beyond [`Ray::MAX_ORIGIN`], ...) returns before the root.
 //!
 //! # Kernels and dispatch ([`Kernels`])
-//! A plain `cargo build` runs the fastest the CPU has: the wide traversal is compiled once
-//! inside a function with AVX2 and FMA enabled (chosen after `is_x86_feature_detected!`), once
-//! with SSE2 intrinsics (every x86-64 CPU) and once on plain arrays (any target, what aarch64
-//! runs). [`Bvh::set_kernels`] or [`BvhParams::kernels`] force one; `Scalar` tests each triangle
-//! with rt-core's scalar functions, the reference the others are tested against. The only
-//! `unsafe` code is in `src/simd.rs`, each block with its reason.
+//! The kernels are rt-simd's, written once over the lane width: the slab test of eight child
+//! boxes and the watertight (or Möller–Trumbore) test of four triangles. A plain `cargo build`
+//! runs the fastest the CPU has ([`Isa::detect`]; `RT_ACCEL_PORTABLE=1` forces the portable
+//! ones): the wide traversal is compiled once inside a function with AVX2 and FMA enabled (for
+//! CPUs with AVX2 or AVX-512), once with SSE2 intrinsics (every x86-64 CPU) and once on plain
+//! arrays (any target, what aarch64 runs). [`Bvh::set_kernels`] or [`BvhParams::kernels`] force
+//! one; `Scalar` tests each triangle with rt-core's scalar functions, the reference the others
+//! are tested against. The crate has no `unsafe` code: rt-simd holds it.
 //!
 //! # Ray bundles
 //! [`Accel::intersect_bundle`] and [`Accel::occluded_bundle`] trace coherent rays (a camera's
 //! 8×8 pixel tiles, shadow rays towards one light) through the wide tree together, up to 64 of
-//! one direction octant at a time ([`rt_core::bundle`]): the interval-culled packet traversal of
+//! one direction octant at a time ([`rt_simd::bundle`]): the interval-culled packet traversal of
 //! Wald, Boulos & Shirley (2007) with per-lane masks (Overbeck et al. 2008). At a node one
 //! vector test bounds every lane against all eight children; the children left are tested lane
 //! by lane with each lane's own slab arithmetic, eight lanes per vector (when the lanes share
@@ -130,13 +132,13 @@
 //!
 //! # Instances
 //! [`Instances`] is the top level of a two-level scene: a binary SAH BVH (one instance per leaf,
-//! an instance priced at 8 node visits) over the world boxes of [`rt_core::Instance`]s, each a
+//! an instance priced at 8 node visits) over the world boxes of [`rt_instance::Instance`]s, each a
 //! built structure of any kind (shared, never copied) with an affine transform. The walk is near
 //! child first; at each instance the ray is carried into object space and the bottom level
 //! traced up to the best hit so far. Node boxes are tested grown by
-//! [`InstanceTransform::ray_pad`](rt_core::InstanceTransform::ray_pad), so the rounding of that
+//! [`InstanceTransform::ray_pad`](rt_instance::InstanceTransform::ray_pad), so the rounding of that
 //! transform never culls an instance holding a hit, and the answers equal
-//! [`LinearInstances`](rt_core::LinearInstances)'s exactly. Per instance: 192 bytes for the
+//! [`LinearInstances`](rt_instance::LinearInstances)'s exactly. Per instance: 192 bytes for the
 //! record (both affine maps, the world box, the id, the shared structure's pointer) and the top
 //! level's nodes.
 //!
@@ -152,12 +154,12 @@
 //! a rebuild and its trace are cheaper than a refit and its trace (`cargo xtask animate`).
 //!
 //! # Saving and loading
-//! [`Persist`](rt_core::persist::Persist) writes a built tree to a versioned file and reads it back
+//! [`Persist`] writes a built tree to a versioned file and reads it back
 //! without rebuilding: the nodes (binary or wide), the triangle packs or the reordered primitives
 //! and their ids, and what the build left out; the SIMD kernels are chosen again for the loading
 //! CPU (the sections are listed in [`persist`]). Loading checks the file's framing and checksum,
 //! then runs [`Bvh::validate`], so a truncated, damaged or hostile file is refused with a typed
-//! [`LoadError`](rt_core::persist::LoadError) and a loaded tree answers every query bit for bit as
+//! [`LoadError`] and a loaded tree answers every query bit for bit as
 //! the saved one.
 //!
 //! # Measurements
@@ -215,17 +217,19 @@ mod overlap;
 pub mod persist;
 mod refit;
 mod regions;
-mod simd;
 mod traverse;
 mod validate;
 
 pub use instance::Instances;
 pub use node::{ChildRef, Node, PACK, TriPack, WIDTH, WideNode};
 pub use rt_core::ValidationError;
+/// Saving and loading, re-exported so that a user of this crate alone can save and load.
+pub use rt_persist::{LoadError, Persist};
+/// The instruction set of [`Kernels::Simd`], re-exported from rt-simd.
+pub use rt_simd::Isa;
 
-use rt_core::bundle::{Bundle, Lanes};
 use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, RayQuery, Stats, TriangleTest};
-use simd::Isa;
+use rt_simd::{Bundle, Lanes};
 use traverse::{Packs, Prims, ScalarPacks};
 
 /// The deepest a tree may be, and so the size of the fixed traversal stacks.
@@ -253,18 +257,15 @@ pub enum Layout {
     Wide,
 }
 
-/// Which code traces a wide tree (see [`Bvh::set_kernels`]). By default the first of `Avx2`,
-/// `Sse2` and `Portable` that the CPU runs.
+/// Which code traces a wide tree (see [`Bvh::set_kernels`]). By default rt-simd's kernels with
+/// the instruction set [`Isa::detect`] finds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Kernels {
-    /// The SIMD kernels with AVX2 intrinsics, compiled with AVX2 and FMA enabled (x86-64 CPUs
-    /// that have both, detected at run time).
-    Avx2,
-    /// The same kernels with SSE2 intrinsics (every x86-64 CPU).
-    Sse2,
-    /// The same kernels on plain arrays, compiled for the target's baseline (any target; what
-    /// aarch64 runs).
-    Portable,
+    /// rt-simd's kernels (the slab test of eight children, the triangle tests of four) with
+    /// this instruction set: AVX2 (for [`Isa::Avx2`] and [`Isa::Avx512`], compiled with AVX2
+    /// and FMA enabled), SSE2, or the portable ones on plain arrays (any target; what aarch64
+    /// runs).
+    Simd(Isa),
     /// Triangles tested one at a time with the scalar functions of `rt-core`: the reference the
     /// SIMD kernels are tested against, bit for bit.
     Scalar,
@@ -549,45 +550,38 @@ impl<P: Primitive> Bvh<P> {
         self.items().map_or(&[], |i| &i.ids)
     }
 
-    /// The kernels that trace this tree (always [`Kernels::Portable`] for the binary layout,
+    /// The kernels that trace this tree (always the portable ones for the binary layout,
     /// whose traversal is scalar).
     pub fn kernels(&self) -> Kernels {
         match &self.tree {
-            Tree::Binary { .. } => Kernels::Portable,
+            Tree::Binary { .. } => Kernels::Simd(Isa::Portable),
             Tree::Wide(w) => w.kernels,
         }
     }
 
-    /// Chooses the fastest kernels this CPU runs for a wide tree: AVX2, else SSE2, else the
-    /// portable ones.
+    /// Chooses the fastest kernels this CPU runs for a wide tree ([`Isa::detect`]:
+    /// `RT_ACCEL_PORTABLE=1` chooses the portable ones).
     pub(crate) fn set_fastest_kernels(&mut self) {
-        let _ = [Kernels::Avx2, Kernels::Sse2, Kernels::Portable]
-            .into_iter()
-            .any(|k| self.set_kernels(k));
+        self.set_kernels(Kernels::Simd(Isa::detect()));
     }
 
-    /// Chooses the kernels that trace a wide tree. Returns `false`, changing nothing, when this
-    /// CPU cannot run them (AVX2 without AVX2 and FMA) or the tree is binary.
+    /// Chooses the kernels that trace a wide tree. Returns `false`, changing nothing, for a
+    /// binary tree (whose traversal is scalar) unless `kernels` are the portable ones.
     pub fn set_kernels(&mut self, kernels: Kernels) -> bool {
         let Tree::Wide(wide) = &mut self.tree else {
-            return kernels == Kernels::Portable;
-        };
-        let isa = match kernels {
-            Kernels::Avx2 => Isa::avx2(),
-            Kernels::Sse2 => Isa::sse2(),
-            Kernels::Portable | Kernels::Scalar => Some(Isa::Portable),
-        };
-        let Some(isa) = isa else {
-            return false;
+            return kernels == Kernels::Simd(Isa::Portable);
         };
         wide.kernels = kernels;
-        wide.isa = isa;
+        wide.isa = match kernels {
+            Kernels::Simd(isa) => isa,
+            Kernels::Scalar => Isa::Portable,
+        };
         true
     }
 
-    /// The query core behind [`Accel::ray_query`], [`Accel::intersect_with`] and
-    /// [`Accel::occluded_with`]: the tree's walk for `q`, which sees each stored triangle once
-    /// (bit-identical copies left out of the tree are [`Accel::ray_query`]'s to add).
+    /// The query core behind [`Accel::ray_query`]: the tree's walk for `q`, which sees each
+    /// stored triangle once (bit-identical copies left out of the tree are
+    /// [`Accel::ray_query`]'s to add).
     #[inline(always)]
     fn query<S: Stats, Q: RayQuery>(&self, ray: &Ray, q: &mut Q, stats: &mut S) {
         // Outside the precondition (NaN, huge origins, ...): answer at once, walk nothing.
@@ -614,7 +608,7 @@ impl<P: Primitive> Bvh<P> {
     /// The bundle queries' core: each of the first `slots` rays answered through `answer(slot,
     /// answer)`, where an any-hit answer is `Some` when occluded. The wide tree traces coherent
     /// rays as bundles (`bundle.rs`) through rt-core's frame for bundle queries
-    /// ([`walk_groups`](rt_core::bundle::walk_groups)): a bundle that misses the
+    /// ([`walk_groups`](rt_simd::bundle::walk_groups)): a bundle that misses the
     /// root's box is answered at once; one whose directions spread more than
     /// [`bundle::MAX_SPREAD`], a bundle of one ray and a ray that cannot travel in one take the
     /// single-ray path. The binary tree walks its own way ([`bundle::binary_bundle`]).
@@ -637,11 +631,11 @@ impl<P: Primitive> Bvh<P> {
             }
             Tree::Binary { nodes, items } if rays.len() > 1 && !items.ids.is_empty() => {
                 let bounds = self.root_bounds();
-                rt_core::bundle::walk_groups::<S, ANY>(
+                rt_simd::bundle::walk_groups::<S, ANY>(
                     rays,
                     slots,
                     stats,
-                    |ray, stats| rt_core::bundle::single::<_, S, ANY>(self, ray, stats),
+                    |ray, stats| rt_simd::bundle::single::<_, S, ANY>(self, ray, stats),
                     |b| b.route(&bounds, coherent),
                     // Inlined, so that the walk is compiled with the vector instructions `walk_groups` runs
                     // with (`Isa::run`).
@@ -657,17 +651,17 @@ impl<P: Primitive> Bvh<P> {
             _ => {
                 for (slot, ray) in rays.iter().enumerate() {
                     stats.single_ray();
-                    answer(slot, rt_core::bundle::single::<_, S, ANY>(self, ray, stats));
+                    answer(slot, rt_simd::bundle::single::<_, S, ANY>(self, ray, stats));
                 }
                 return;
             }
         };
         let bounds = self.root_bounds();
-        rt_core::bundle::walk_groups::<S, ANY>(
+        rt_simd::bundle::walk_groups::<S, ANY>(
             rays,
             slots,
             stats,
-            |ray, stats| rt_core::bundle::single::<_, S, ANY>(self, ray, stats),
+            |ray, stats| rt_simd::bundle::single::<_, S, ANY>(self, ray, stats),
             |b| b.route(&bounds, coherent),
             |b, lanes, stats| {
                 wide.bundle::<S, ANY>(b, lanes, stats);
@@ -699,12 +693,20 @@ impl<S: Stats, Q: RayQuery> LeafWalk for OneRay<'_, S, Q> {
     type Out = ();
     #[inline(always)]
     fn walk<L: traverse::Leaves>(self, nodes: &[WideNode], isa: Isa, leaves: &L) {
-        simd::dispatch(isa, nodes, leaves, self.ray, self.sort, self.q, self.stats)
+        let (ray, sort, q, stats) = (self.ray, self.sort, self.q, self.stats);
+        isa.wide(traverse::WideRay {
+            nodes,
+            leaves,
+            ray,
+            sort,
+            q,
+            stats,
+        })
     }
 }
 
 /// One ray's closest hit through [`traverse::wide`], written into `out`
-/// ([`simd::dispatch_into`] says why).
+/// ([`traverse::WideRayInto`] says why).
 struct OneRayInto<'a, S> {
     ray: &'a Ray,
     sort: bool,
@@ -716,9 +718,15 @@ impl<S: Stats> LeafWalk for OneRayInto<'_, S> {
     type Out = ();
     #[inline(always)]
     fn walk<L: traverse::Leaves>(self, nodes: &[WideNode], isa: Isa, leaves: &L) {
-        simd::dispatch_into::<_, S>(
-            isa, nodes, leaves, self.ray, self.sort, self.stats, self.out,
-        )
+        let (ray, sort, stats, out) = (self.ray, self.sort, self.stats, self.out);
+        isa.wide(traverse::WideRayInto {
+            nodes,
+            leaves,
+            ray,
+            sort,
+            stats,
+            out,
+        })
     }
 }
 
@@ -729,7 +737,13 @@ impl<S: Stats, const ANY: bool> LeafWalk for OneBundle<'_, '_, S, ANY> {
     type Out = ();
     #[inline(always)]
     fn walk<L: traverse::Leaves>(self, nodes: &[WideNode], isa: Isa, leaves: &L) {
-        simd::dispatch_bundle::<_, S, ANY>(isa, nodes, leaves, self.0, self.1, self.2)
+        isa.wide(bundle::WideBundle::<L, S, ANY> {
+            nodes,
+            leaves,
+            bundle: self.0,
+            lanes: self.1,
+            stats: self.2,
+        })
     }
 }
 
@@ -826,7 +840,7 @@ impl<P: Primitive> Accel for Bvh<P> {
                     },
                     None => Leaves::Items(items),
                 },
-                kernels: Kernels::Portable,
+                kernels: Kernels::Simd(Isa::Portable),
                 isa: Isa::Portable,
                 ablation: params.ablation,
             }),
@@ -855,10 +869,11 @@ impl<P: Primitive> Accel for Bvh<P> {
     }
 
     /// The tree's walk; bit-identical copies of a stored triangle, which the tree stores once,
-    /// are offered with it.
+    /// are offered with it to a query they can change (not a closest or any hit:
+    /// [`RayQuery::COPIES_CHANGE_NOTHING`]).
     #[inline]
     fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
-        if self.input.twins.is_empty() {
+        if Q::COPIES_CHANGE_NOTHING || self.input.twins.is_empty() {
             self.query(ray, query, stats);
         } else {
             self.query(
@@ -867,23 +882,6 @@ impl<P: Primitive> Accel for Bvh<P> {
                 stats,
             );
         }
-    }
-
-    /// The tree's walk alone: a copy of a stored triangle has a larger index and the same hit,
-    /// so it never beats the stored one.
-    #[inline]
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        let mut q = rt_core::ClosestHit::new(ray);
-        self.query(ray, &mut q, stats);
-        q.hit()
-    }
-
-    /// The tree's walk alone: a copy blocks exactly where its stored triangle does.
-    #[inline]
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        let mut q = rt_core::AnyHit::new(ray);
-        self.query(ray, &mut q, stats);
-        q.occluded()
     }
 
     /// Coherent rays of the wide tree walk it in bundles (`bundle.rs`); see
@@ -896,7 +894,7 @@ impl<P: Primitive> Accel for Bvh<P> {
         stats: &mut S,
     ) {
         // One ray goes straight to the single-ray walk, which writes its answer in place
-        // (`simd::dispatch_into` says why).
+        // (`traverse::WideRayInto` says why).
         if let ([ray], [slot]) = (rays, &mut *out) {
             stats.single_ray();
             match &self.tree {

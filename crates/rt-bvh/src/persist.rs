@@ -1,6 +1,6 @@
 //! Saving and loading a built tree ([`Persist`]).
 //!
-//! The sections, in the framing of [`rt_core::persist`] (layout version [`LAYOUT`]):
+//! The sections, in the framing of [`rt_persist`] (layout version [`LAYOUT`]):
 //!
 //! | tag | elements | what |
 //! | --- | --- | --- |
@@ -16,10 +16,11 @@
 //! primitive of the input. The kernels are chosen for the loading machine, as a build chooses
 //! them.
 
+use crate::WideNode;
 use crate::{Ablation, Bvh, Input, Items, Kernels, Layout, Leaves, Node, Tree, TriPack, Wide};
-use crate::{WideNode, simd::Isa};
-use rt_core::persist::{LoadError, Persist, Reader, SavedPrimitive, Writer, to_bool, to_usize};
 use rt_core::{Primitive, TriangleTest, ValidationError};
+use rt_persist::{LoadError, Persist, Reader, SavedPrimitive, Writer, to_bool, to_usize};
+use rt_simd::Isa;
 
 /// The version of the sections this module writes.
 pub const LAYOUT: u32 = 1;
@@ -97,7 +98,7 @@ impl<P: SavedPrimitive> Persist for Bvh<P> {
             Tree::Wide(Wide {
                 nodes: r.section::<WideNode>("nodes")?,
                 leaves,
-                kernels: Kernels::Portable,
+                kernels: Kernels::Simd(Isa::Portable),
                 isa: Isa::Portable,
                 ablation: Ablation::default(),
             })

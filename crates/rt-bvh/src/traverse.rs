@@ -2,12 +2,11 @@
 //! and triangle tests. Each has one generic core for every ray query ([`RayQuery`]): closest
 //! hit, any hit, filters, all hits.
 
-use crate::kernels::{self, BoxRay, RayData, Simd};
+use crate::kernels::{self, RayData, Wide};
 use crate::node::Node;
 use crate::node::{ChildRef, TriPack, WIDTH, WideNode};
 use crate::{Items, MAX_DEPTH};
 use rt_core::Stack;
-use rt_core::bundle::Lanes;
 use rt_core::glam::Vec3;
 use rt_core::query::BLOCKS;
 use rt_core::trace::{self, Event, Place};
@@ -15,6 +14,7 @@ use rt_core::{
     AnyHit, ClosestHit, Hit, PrimHit, Primitive, Ray, RayQuery, SLAB_FAR_SCALE, Stats, Triangle,
     TriangleTest, leaf,
 };
+use rt_simd::{Lanes, Simd, WithLanes};
 use std::ops::ControlFlow;
 use std::ops::Range;
 
@@ -160,7 +160,7 @@ pub(crate) const WIDE_STACK: usize = (WIDTH - 1) * MAX_DEPTH;
 pub(crate) trait Leaves {
     /// Tests the leaf's items against the ray up to `q.t_far()` and offers `q` the hits (for
     /// an occlusion query, the first only). Returns true when the query ends the walk.
-    fn test<X: Simd, S: Stats, Q: RayQuery>(
+    fn test<X: Wide, S: Stats, Q: RayQuery>(
         &self,
         simd: X,
         items: Range<usize>,
@@ -176,7 +176,7 @@ pub(crate) trait Leaves {
     /// [`Leaves::test`]; triangle packs for the watertight test override it to test one
     /// triangle against a vector of lanes at a time.
     #[inline(always)]
-    fn test_lanes<X: Simd, S: Stats, const ANY: bool>(
+    fn test_lanes<X: Wide, S: Stats, const ANY: bool>(
         &self,
         simd: X,
         items: Range<usize>,
@@ -191,7 +191,7 @@ pub(crate) trait Leaves {
 /// [`Leaves::test_lanes`] lane by lane: each lane of `mask` through `leaves`' single-ray test,
 /// from its best hit so far.
 #[inline(always)]
-fn lane_by_lane<L: Leaves + ?Sized, X: Simd, S: Stats, const ANY: bool>(
+fn lane_by_lane<L: Leaves + ?Sized, X: Wide, S: Stats, const ANY: bool>(
     leaves: &L,
     simd: X,
     items: Range<usize>,
@@ -205,7 +205,7 @@ fn lane_by_lane<L: Leaves + ?Sized, X: Simd, S: Stats, const ANY: bool>(
         let i = m.trailing_zeros() as usize;
         m &= m - 1;
         let ray = lanes.ray(i);
-        let r = RayData::with_shear(simd, &ray, BoxRay::new(simd, &ray), lanes.shear(i));
+        let r = RayData::with_shear(simd, &ray, kernels::box_ray(simd, &ray), lanes.shear(i));
         if ANY {
             let mut q = AnyHit::new(&ray);
             leaves.test(simd, items.clone(), &r, &ray, &mut q, stats);
@@ -229,7 +229,7 @@ pub(crate) struct Packs<'a, const MT: bool> {
 
 impl<const MT: bool> Leaves for Packs<'_, MT> {
     #[inline(always)]
-    fn test<X: Simd, S: Stats, Q: RayQuery>(
+    fn test<X: Wide, S: Stats, Q: RayQuery>(
         &self,
         simd: X,
         items: Range<usize>,
@@ -248,7 +248,7 @@ impl<const MT: bool> Leaves for Packs<'_, MT> {
                 kernels::watertight4(simd, pack, r, q.t_far())
             };
             if S::TRACE {
-                let t = simd.store4(h.t);
+                let t = Simd::<4>::store(simd, h.t);
                 for (lane, &id) in pack.ids[..pack.len()].iter().enumerate() {
                     let hit = (h.mask & 1 << lane != 0).then_some(t[lane]);
                     if Q::OCCLUSION {
@@ -264,7 +264,11 @@ impl<const MT: bool> Leaves for Packs<'_, MT> {
             }
             let mut mask = h.mask;
             if mask != 0 {
-                let (t, u, v) = (simd.store4(h.t), simd.store4(h.u), simd.store4(h.v));
+                let (t, u, v) = (
+                    Simd::<4>::store(simd, h.t),
+                    Simd::<4>::store(simd, h.u),
+                    Simd::<4>::store(simd, h.v),
+                );
                 while mask != 0 {
                     let lane = mask.trailing_zeros() as usize;
                     mask &= mask - 1;
@@ -293,7 +297,7 @@ impl<const MT: bool> Leaves for Packs<'_, MT> {
     // with eight lanes at a time everywhere; the bunny 2.27 and 2.67 (noisy), 2.07 and 2.12,
     // 1.93 and 2.02.
     #[inline(always)]
-    fn test_lanes<X: Simd, S: Stats, const ANY: bool>(
+    fn test_lanes<X: Wide, S: Stats, const ANY: bool>(
         &self,
         simd: X,
         items: Range<usize>,
@@ -342,7 +346,7 @@ pub(crate) struct ScalarPacks<'a> {
 }
 
 impl Leaves for ScalarPacks<'_> {
-    fn test<X: Simd, S: Stats, Q: RayQuery>(
+    fn test<X: Wide, S: Stats, Q: RayQuery>(
         &self,
         _: X,
         items: Range<usize>,
@@ -388,7 +392,7 @@ pub(crate) struct Prims<'a, P> {
 
 impl<P: Primitive> Leaves for Prims<'_, P> {
     #[inline(always)]
-    fn test<X: Simd, S: Stats, Q: RayQuery>(
+    fn test<X: Wide, S: Stats, Q: RayQuery>(
         &self,
         _: X,
         items: Range<usize>,
@@ -411,6 +415,70 @@ fn place(c: ChildRef) -> Place {
     }
 }
 
+/// One ray through [`wide`] with an instruction set's operations ([`rt_simd::Isa::wide`] runs
+/// it inside a frame compiled for them).
+pub(crate) struct WideRay<'a, L, S, Q> {
+    pub nodes: &'a [WideNode],
+    pub leaves: &'a L,
+    pub ray: &'a Ray,
+    pub sort: bool,
+    pub q: &'a mut Q,
+    pub stats: &'a mut S,
+}
+
+impl<L: Leaves, S: Stats, Q: RayQuery> WithLanes for WideRay<'_, L, S, Q> {
+    type Out = ();
+    #[inline(always)]
+    fn run<X: Simd<4> + Simd<8>>(self, simd: X) {
+        wide(
+            simd,
+            self.nodes,
+            self.leaves,
+            self.ray,
+            self.sort,
+            self.q,
+            self.stats,
+        );
+    }
+}
+
+/// [`WideRay`] for a closest hit written into `out`, the caller's slot: the path of a bundle of
+/// one ray.
+///
+/// A returned answer comes back through a hidden pointer, field by field in 4-byte stores. A
+/// caller that copies it on into a slice reads it back at once with wider loads, which the CPU
+/// cannot forward from those stores, so the copy waits for the stores to retire. Written in
+/// place, there is no copy to wait for. The single-ray query keeps its return value: routed
+/// through an answer slot of its own, it is the one that copies (2.5% slower on the bunny).
+// PERF: a bundle of one ray over a single-ray call, wide tree, geometric mean of four scenes
+// (`cargo bench -p rt-benches --bench bundle_of_one`): 1.043 with the copy, 1.007 in place.
+pub(crate) struct WideRayInto<'a, L, S> {
+    pub nodes: &'a [WideNode],
+    pub leaves: &'a L,
+    pub ray: &'a Ray,
+    pub sort: bool,
+    pub stats: &'a mut S,
+    pub out: &'a mut Option<Hit>,
+}
+
+impl<L: Leaves, S: Stats> WithLanes for WideRayInto<'_, L, S> {
+    type Out = ();
+    #[inline(always)]
+    fn run<X: Simd<4> + Simd<8>>(self, simd: X) {
+        let mut q = ClosestHit::new(self.ray);
+        wide(
+            simd,
+            self.nodes,
+            self.leaves,
+            self.ray,
+            self.sort,
+            &mut q,
+            self.stats,
+        );
+        *self.out = q.hit();
+    }
+}
+
 /// The wide traversal core, shared by every ray query.
 /// `sort = false` skips sorting the children a closest-hit ray enters (a switch to measure what
 /// the sorting gains; see [`Ablation::sort_children`](crate::Ablation::sort_children)). It is a
@@ -427,7 +495,7 @@ fn place(c: ChildRef) -> Place {
 /// children are pushed in lane order, and the first hit ends the walk. Leaves are tested when
 /// popped, like nodes.
 #[inline(always)]
-pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, Q: RayQuery>(
+pub(crate) fn wide<X: Wide, L: Leaves, S: Stats, Q: RayQuery>(
     simd: X,
     nodes: &[WideNode],
     leaves: &L,
@@ -439,7 +507,7 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, Q: RayQuery>(
     // PERF: the root is tested before the triangle tests' part of the ray is set up, which a
     // ray that misses every child never needs: single-threaded, interleaved runs of both builds,
     // bunny primary rays 1.04x and incoherent 1.03x as fast, shadow rays unchanged.
-    let boxes = BoxRay::new(simd, ray);
+    let boxes = kernels::box_ray(simd, ray);
     if kernels::slab8(simd, &nodes[0], &boxes, q.t_far()).0 == 0 {
         stats.node_visit();
         trace::report(stats, || Event::Enter {
@@ -470,7 +538,7 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, Q: RayQuery>(
             let node = &nodes[current.index()];
             let (mask, t_entry) = kernels::slab8(simd, node, &r.boxes, q.t_far());
             let t_children = if S::TRACE {
-                simd.store8(t_entry)
+                Simd::<8>::store(simd, t_entry)
             } else {
                 [0.0; 8]
             };
@@ -502,7 +570,7 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, Q: RayQuery>(
                 } else if !sort {
                     // Unsorted (only to measure what sorting gains): the first child entered
                     // next, the others pushed in lane order with their entry distances.
-                    let t_entry = simd.store8(t_entry);
+                    let t_entry = Simd::<8>::store(simd, t_entry);
                     let first = mask.trailing_zeros() as usize;
                     let mut m = mask & (mask - 1);
                     while m != 0 {
@@ -514,7 +582,7 @@ pub(crate) fn wide<X: Simd, L: Leaves, S: Stats, Q: RayQuery>(
                     continue;
                 } else {
                     // Insertion sort of the entered children, farthest first.
-                    let t_entry = simd.store8(t_entry);
+                    let t_entry = Simd::<8>::store(simd, t_entry);
                     let mut hits = [(0u32, 0.0f32); WIDTH];
                     let mut n = 0;
                     let mut m = mask;

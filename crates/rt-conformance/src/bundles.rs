@@ -45,7 +45,7 @@ pub fn bundle_orders(rays: &[Ray], seed: u64) -> Vec<(&'static str, Vec<Ray>)> {
     // Round robin over the octants: ray k of octant 0, of octant 1, ..., then ray k + 1.
     let mut by_octant: [Vec<Ray>; 8] = Default::default();
     for r in rays {
-        by_octant[rt_core::bundle::octant(r)].push(*r);
+        by_octant[rt_simd::bundle::octant(r)].push(*r);
     }
     let longest = by_octant.iter().map(Vec::len).max().unwrap_or(0);
     let mixed = (0..longest)

@@ -2,9 +2,8 @@
 //! answer as brute force's, and the fast winding number keeps its stated tolerance.
 
 use crate::{Doing, Probe};
-use rt_core::{
-    Accel, BruteForce, PointHit, Ray, SignedPoint, WindingTree, glam::Vec3, winding_number_exact,
-};
+use rt_core::{Accel, BruteForce, PointHit, Ray, glam::Vec3};
+use rt_sdf::{SignedDistance, SignedPoint, WindingTree, winding_number_exact};
 use std::fmt;
 
 /// A disagreement on one point's signed distance, winding number or crossing parity.
@@ -45,8 +44,8 @@ pub const SIGN_MARGIN: f64 = 1e-6;
 /// The tolerance the kit asks of [`WindingTree::winding_number`].
 const TOLERANCE: f64 = 0.01;
 
-/// Compares `accel`'s [`signed_distance`](Accel::signed_distance) and
-/// [`inside_by_parity`](Accel::inside_by_parity) with brute force's for every `(point, maximum
+/// Compares `accel`'s [`signed_distance`](SignedDistance::signed_distance) and
+/// [`inside_by_parity`](SignedDistance::inside_by_parity) with brute force's for every `(point, maximum
 /// distance)`, and the fast winding number with the exact one:
 /// - the signed distance's closest point agrees with brute force's ([`PointHit::agree`]), its
 ///   sign is the exact winding number's (above ½ is inside) wherever that is more than

@@ -5,9 +5,9 @@ use super::{STALL_LIMIT, proptest_failure, scene, scene_points, stall_stops_shri
 use glam::{Affine3A, Quat, Vec3};
 use proptest::prelude::*;
 use proptest::test_runner::{Config, TestRunner};
-use rt_core::{
-    Accel, BruteForce, Counters, DynAccel, Hit, Instance, InstanceHit, InstancePointHit,
-    LinearInstances, Primitive, Ray, Rng, Triangle, TwoLevel, scene_margins,
+use rt_core::{Accel, BruteForce, Counters, DynAccel, Hit, Primitive, Ray, Rng, Triangle};
+use rt_instance::{
+    Instance, InstanceHit, InstancePointHit, LinearInstances, TwoLevel, scene_margins,
 };
 use std::collections::HashMap;
 use std::sync::Arc;

@@ -3,8 +3,8 @@
 //! queries return, never a panic or a walk that does not end.
 
 use crate::{STALL_LIMIT, boxes::scene_boxes, scene_points, watched};
-use rt_core::persist::{Persist, SavedPrimitive, file_checksum};
 use rt_core::{Accel, Ray, Rng, Triangle};
+use rt_persist::{Persist, SavedPrimitive, file_checksum};
 
 /// Damaged copies of each scene's file that [`check_saved_case`] loads.
 pub const DAMAGES: usize = 100;

@@ -2,50 +2,10 @@
 
 use crate::{
     Aabb, AllHits, AnyHit, BallQuery, BoxQuery, ClosestHit, ClosestPointQuery, CountHits, Filtered,
-    Geometry, NoStats, OverlapQuery, PointHit, PrimHit, Primitive, Ray, RayQuery, SignedPoint,
-    Stats, WindingTree,
+    Geometry, Hit, NoStats, OverlapQuery, PointHit, PrimHit, Primitive, Ray, RayQuery, Stats,
 };
 use glam::Vec3;
 use std::fmt::Debug;
-
-/// The closest hit of a ray: which primitive (its index in the slice the structure was built
-/// from), where along the ray, and the primitive's surface coordinates there.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit {
-    /// Index of the primitive in the build input.
-    pub prim: u32,
-    /// Ray parameter of the hit.
-    pub t: f32,
-    /// First surface coordinate (barycentric weight of `v1` for triangles).
-    pub u: f32,
-    /// Second surface coordinate (barycentric weight of `v2` for triangles).
-    pub v: f32,
-}
-
-impl Hit {
-    /// The tie rule every structure follows: a hit at `(t, prim)` replaces the best so far when it
-    /// is strictly closer, or equally close on a primitive with a smaller index. This makes the
-    /// answer unique, so two correct structures always agree exactly.
-    #[inline(always)]
-    pub fn beats(t: f32, prim: u32, best_t: f32, best_prim: u32) -> bool {
-        t < best_t || (t == best_t && prim < best_prim)
-    }
-
-    /// Whether two closest-hit answers agree: both miss, or both hit the same primitive with `t`
-    /// equal or within a relative `1e-5`. This is the equality the conformance kit and `compare`
-    /// use. (Equal counts for an infinite `t` too: a valid ray with a direction near the
-    /// smallest normal `f32` has hits whose `t` overflows.)
-    pub fn agree(a: Option<Hit>, b: Option<Hit>) -> bool {
-        match (a, b) {
-            (None, None) => true,
-            (Some(a), Some(b)) => {
-                let close = a.t.is_finite() && (a.t - b.t).abs() <= 1e-5 * a.t.abs().max(1.0);
-                a.prim == b.prim && (a.t == b.t || close)
-            }
-            _ => false,
-        }
-    }
-}
 
 /// Shape of a built structure, reported by [`Accel::build_stats`].
 #[derive(Clone, Debug, Default, PartialEq)]
@@ -106,8 +66,26 @@ pub struct Region {
 
 /// A ray-tracing acceleration structure over primitives of type [`Accel::Prim`].
 ///
-/// Contract, checked for every implementation by the conformance kit (the `rt-conformance`
-/// crate):
+/// # What a structure implements
+/// Six methods are required: [`presets`](Accel::presets), [`build`](Accel::build),
+/// [`bounds`](Accel::bounds), [`ball_query`](Accel::ball_query),
+/// [`memory_bytes`](Accel::memory_bytes) and [`build_stats`](Accel::build_stats). With them every
+/// query answers, through the ball walk. A structure overrides one walk per kind of query to
+/// make it fast, and every query of that kind comes from that walk:
+/// - [`ray_query`](Accel::ray_query), the ray walk: closest hit, any hit, filters, all hits and
+///   counts are its queries ([`RayQuery`]);
+/// - [`box_query`](Accel::box_query), the box walk behind box overlap;
+/// - [`intersect_bundle_with`](Accel::intersect_bundle_with) and
+///   [`occluded_bundle_with`](Accel::occluded_bundle_with), the packet walks of many rays;
+/// - and, to build straight from indexed buffers or to be drawn,
+///   [`build_from`](Accel::build_from) and [`regions`](Accel::regions).
+///
+/// The other methods derive from those, and a structure leaves them as they are: the
+/// conformance kit checks a structure's walks through them (an override would be checked in
+/// place of the walk it hides), and users call them.
+///
+/// # Contract
+/// Checked for every implementation by the conformance kit (the `rt-conformance` crate):
 /// - [`intersect`](Accel::intersect) returns exactly what [`BruteForce`](crate::BruteForce)
 ///   returns: the hit with the smallest `t` in `[ray.t_min, ray.t_max]`, ties broken by the
 ///   smallest primitive index ([`Hit::beats`]);
@@ -282,7 +260,7 @@ pub trait Accel: Sized + Send + Sync {
     ///
     /// Every answer is exactly what [`intersect_with`](Accel::intersect_with) returns for that
     /// ray: the same primitive and the same bits of `t`, `u` and `v`. The default does exactly
-    /// that, one ray at a time ([`bundle::intersect_each`](crate::bundle::intersect_each)); a
+    /// that, one ray at a time ([`intersect_each`]); a
     /// structure that traces coherent rays together overrides it and counts as the
     /// [`bundle`](crate::bundle) module describes.
     #[inline]
@@ -292,14 +270,14 @@ pub trait Accel: Sized + Send + Sync {
         out: &mut [Option<Hit>],
         stats: &mut S,
     ) {
-        crate::bundle::intersect_each(self, rays, out, stats);
+        intersect_each(self, rays, out, stats);
     }
 
     /// Whether anything is hit in each ray's interval, into the same slot of `out`: as many rays
     /// as both slices have slots, each answer exactly [`occluded_with`](Accel::occluded_with)'s.
     #[inline]
     fn occluded_bundle_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
-        crate::bundle::occluded_each(self, rays, out, stats);
+        occluded_each(self, rays, out, stats);
     }
 
     /// [`intersect_bundle_with`](Accel::intersect_bundle_with), uncounted.
@@ -373,77 +351,6 @@ pub trait Accel: Sized + Send + Sync {
     #[inline]
     fn closest_point(&self, point: Vec3, max_distance: f32) -> Option<PointHit> {
         self.closest_point_with(point, max_distance, &mut NoStats)
-    }
-
-    /// The distance from `point` to the nearest primitive no farther than `max_distance`,
-    /// negative when `point` is inside the mesh by `sign`'s winding number
-    /// ([`WindingTree::is_inside`]), reporting the closest-point walk's events to `stats`.
-    ///
-    /// `sign` must be built over the primitives this structure was built from. `None` when
-    /// nothing lies that near, and for an invalid query (see [`ClosestPointQuery::new`]). See
-    /// the [`winding`](crate::winding) module.
-    #[inline]
-    fn signed_distance_with<S: Stats>(
-        &self,
-        sign: &WindingTree,
-        point: Vec3,
-        max_distance: f32,
-        stats: &mut S,
-    ) -> Option<SignedPoint> {
-        let near = self.closest_point_with(point, max_distance, stats)?;
-        Some(SignedPoint::signed(near, sign.is_inside(point)))
-    }
-
-    /// The signed distance from `point`: see
-    /// [`signed_distance_with`](Accel::signed_distance_with).
-    #[inline]
-    fn signed_distance(
-        &self,
-        sign: &WindingTree,
-        point: Vec3,
-        max_distance: f32,
-    ) -> Option<SignedPoint> {
-        self.signed_distance_with(sign, point, max_distance, &mut NoStats)
-    }
-
-    /// Whether `point` is inside by counting crossings: a ray from `point` that crosses the
-    /// surface an odd number of times ([`count_hits`](Accel::count_hits)) starts inside, and
-    /// the majority of three rays in fixed directions (not along any axis) decides.
-    ///
-    /// The simple alternative to the winding number ([`WindingTree::is_inside`]), and with no
-    /// tree to build: right for a closed mesh, except that a ray through a shared edge or
-    /// vertex may count the crossing on both triangles, which the vote outweighs only when the
-    /// other two rays are clean. A mesh with holes answers by where the rays happen to leave.
-    /// A point with a non-finite coordinate is outside.
-    ///
-    /// ```
-    /// use rt_core::{Accel, BruteForce, Triangle, glam::Vec3};
-    /// let p = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z];
-    /// let tetrahedron = [
-    ///     Triangle::new(p[0], p[2], p[1]),
-    ///     Triangle::new(p[0], p[1], p[3]),
-    ///     Triangle::new(p[0], p[3], p[2]),
-    ///     Triangle::new(p[1], p[2], p[3]),
-    /// ];
-    /// let accel = BruteForce::build(&tetrahedron, &());
-    /// assert!(accel.inside_by_parity(Vec3::splat(0.2)));
-    /// assert!(!accel.inside_by_parity(Vec3::splat(0.5)));
-    /// ```
-    fn inside_by_parity(&self, point: Vec3) -> bool {
-        // Three unit vectors with exact f32 coordinates, pairwise perpendicular.
-        const DIRECTIONS: [Vec3; 3] = [
-            Vec3::new(0.6, 0.48, 0.64),
-            Vec3::new(-0.48, 0.64, -0.6),
-            Vec3::new(0.64, -0.6, -0.48),
-        ];
-        if !point.is_finite() {
-            return false;
-        }
-        let odd = DIRECTIONS
-            .iter()
-            .filter(|&&d| self.count_hits(&Ray::new(point, d)) % 2 == 1)
-            .count();
-        odd >= 2
     }
 
     /// Offers `query` every valid primitive that may meet its box: the one traversal behind box
@@ -569,6 +476,142 @@ impl std::fmt::Display for ValidationError {
 }
 
 impl std::error::Error for ValidationError {}
+
+/// The default bundle queries' loop: [`Accel::intersect_with`] for each ray into the same slot
+/// of `out` (as many as both have), each counted as a ray traced singly
+/// ([`Stats::single_ray`]).
+pub fn intersect_each<A: Accel, S: Stats>(
+    accel: &A,
+    rays: &[Ray],
+    out: &mut [Option<Hit>],
+    stats: &mut S,
+) {
+    for (o, r) in out.iter_mut().zip(rays) {
+        stats.single_ray();
+        *o = accel.intersect_with(r, stats);
+    }
+}
+
+/// The default bundle queries' loop: [`Accel::occluded_with`] for each ray into the same slot of
+/// `out` (as many as both have), each counted as a ray traced singly.
+pub fn occluded_each<A: Accel, S: Stats>(accel: &A, rays: &[Ray], out: &mut [bool], stats: &mut S) {
+    for (o, r) in out.iter_mut().zip(rays) {
+        stats.single_ray();
+        *o = accel.occluded_with(r, stats);
+    }
+}
+
+/// The methods of an [`Accel`] impl whose walks a structure keeps in its phase files, as
+/// inherent methods: each `walk: method` pair forwards one walk to `self.method(..)`, so the
+/// impl names where each walk lives and writes nothing twice. The walks:
+///
+/// | walk | the methods it writes | `method`'s signature |
+/// | --- | --- | --- |
+/// | `build` | [`build`](Accel::build), building from the slice as from any geometry | the structure's [`build_from`](Accel::build_from) (give `build_from`) |
+/// | `ray` | [`ray_query`](Accel::ray_query) | `fn(&self, &Ray, &mut Q, &mut S)` |
+/// | `bundle` | [`intersect_bundle_with`](Accel::intersect_bundle_with), [`occluded_bundle_with`](Accel::occluded_bundle_with) | `fn::<S, const ANY: bool>(&self, rays: &[Ray], slots: usize, &mut S, answer: impl FnMut(usize, Option<Hit>))`, answering `Some` for a blocked ray when `ANY` |
+/// | `ball` | [`ball_query`](Accel::ball_query) | `fn(&self, &mut Q, &mut S)` |
+/// | `boxes` | [`box_query`](Accel::box_query) | `fn(&self, &mut Q, &mut S) -> ControlFlow<()>` |
+/// | `regions` | [`regions`](Accel::regions) | `fn(&self, &mut dyn FnMut(Region))` |
+///
+/// ```
+/// use rt_core::{Aabb, Accel, BallQuery, BruteForce, BuildStats, Geometry, Triangle};
+/// /// Brute force under another name, its walks kept as inherent methods.
+/// struct Wrapped(BruteForce<Triangle>);
+/// impl Wrapped {
+///     fn ball<Q: BallQuery<Triangle>, S: rt_core::Stats>(&self, q: &mut Q, s: &mut S) {
+///         self.0.ball_query(q, s);
+///     }
+/// }
+/// impl Accel for Wrapped {
+///     type Prim = Triangle;
+///     type Params = ();
+///     const NAME: &'static str = "wrapped";
+///     fn presets() -> Vec<(&'static str, ())> {
+///         vec![("default", ())]
+///     }
+///     fn build_from<G: Geometry<Prim = Triangle> + ?Sized>(g: &G, _: &()) -> Self {
+///         Self(BruteForce::build_from(g, &()))
+///     }
+///     fn bounds(&self) -> Aabb {
+///         self.0.bounds()
+///     }
+///     fn memory_bytes(&self) -> usize {
+///         self.0.memory_bytes()
+///     }
+///     fn build_stats(&self) -> BuildStats {
+///         self.0.build_stats()
+///     }
+///     rt_core::accel_walks!(build: build_from, ball: ball);
+/// }
+/// let tris = [Triangle::new(rt_core::glam::Vec3::ZERO, rt_core::glam::Vec3::X, rt_core::glam::Vec3::Y)];
+/// assert_eq!(Wrapped::build(&tris, &()).overlapping(&Aabb::new(rt_core::glam::Vec3::ZERO, rt_core::glam::Vec3::ONE)), [0]);
+/// ```
+#[macro_export]
+macro_rules! accel_walks {
+    ($($walk:ident : $method:ident),* $(,)?) => {
+        $($crate::accel_walks!(@$walk $method);)*
+    };
+    (@build $method:ident) => {
+        fn build(prims: &[Self::Prim], params: &Self::Params) -> Self {
+            Self::$method(prims, params)
+        }
+    };
+    (@ray $method:ident) => {
+        #[inline]
+        fn ray_query<Q: $crate::RayQuery, S: $crate::Stats>(
+            &self,
+            ray: &$crate::Ray,
+            query: &mut Q,
+            stats: &mut S,
+        ) {
+            self.$method(ray, query, stats);
+        }
+    };
+    (@bundle $method:ident) => {
+        fn intersect_bundle_with<S: $crate::Stats>(
+            &self,
+            rays: &[$crate::Ray],
+            out: &mut [Option<$crate::Hit>],
+            stats: &mut S,
+        ) {
+            self.$method::<S, false>(rays, out.len(), stats, |slot, hit| out[slot] = hit);
+        }
+        fn occluded_bundle_with<S: $crate::Stats>(
+            &self,
+            rays: &[$crate::Ray],
+            out: &mut [bool],
+            stats: &mut S,
+        ) {
+            self.$method::<S, true>(rays, out.len(), stats, |slot, hit| {
+                out[slot] = hit.is_some()
+            });
+        }
+    };
+    (@ball $method:ident) => {
+        fn ball_query<Q: $crate::BallQuery<Self::Prim>, S: $crate::Stats>(
+            &self,
+            query: &mut Q,
+            stats: &mut S,
+        ) {
+            self.$method(query, stats);
+        }
+    };
+    (@boxes $method:ident) => {
+        fn box_query<Q: $crate::BoxQuery<Self::Prim>, S: $crate::Stats>(
+            &self,
+            query: &mut Q,
+            stats: &mut S,
+        ) {
+            let _ = self.$method(query, stats);
+        }
+    };
+    (@regions $method:ident) => {
+        fn regions(&self, visit: &mut dyn FnMut($crate::Region)) {
+            self.$method(visit);
+        }
+    };
+}
 
 #[cfg(test)]
 mod tests {

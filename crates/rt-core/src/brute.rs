@@ -1,9 +1,7 @@
 //! The O(N) reference every structure is checked against.
 
-use crate::bundle::{Group, bundles_ray, for_each_bundle, octant};
-use crate::lanes::Lanes;
 use crate::{
-    Aabb, Accel, BallQuery, BoxQuery, BuildStats, Geometry, Hit, Primitive, Ray, RayQuery, Stats,
+    Aabb, Accel, BallQuery, BoxQuery, BuildStats, Geometry, Primitive, Ray, RayQuery, Stats,
 };
 
 /// Tests every primitive for every ray and keeps the closest: the definition of the right answer.
@@ -17,51 +15,22 @@ pub struct BruteForce<P: Primitive> {
 }
 
 impl<P: Primitive> BruteForce<P> {
-    /// The bundle queries' loop: `answer(slot, hit)` for every ray of `rays` (with `ANY`,
-    /// `Some` when the ray is blocked).
-    fn bundles<S: Stats, const ANY: bool>(
-        &self,
-        rays: &[Ray],
-        stats: &mut S,
-        mut answer: impl FnMut(usize, Option<Hit>),
-    ) {
-        // Rays that cannot travel in a bundle go last, as `for_each_bundle` sends them singly
-        // wherever they are.
-        let key = |r: &Ray| {
-            if bundles_ray(r) { octant(r) } else { 8 }
-        };
-        let mut order: Vec<u32> = (0..rays.len() as u32).collect();
-        order.sort_by_key(|&i| key(&rays[i as usize]));
-        let sorted: Vec<Ray> = order.iter().map(|&i| rays[i as usize]).collect();
-        for_each_bundle(&sorted, |group| match group {
-            Group::Single(k, ray) => {
-                stats.single_ray();
-                let hit = crate::bundle::single::<_, S, ANY>(self, ray, stats);
-                answer(order[k] as usize, hit);
-            }
-            Group::Bundle(b) => {
-                let mut lanes = Lanes::new(b);
-                let mut live = b.all_lanes();
-                for (p, &id) in self.prims.iter().zip(&self.ids) {
-                    if ANY {
-                        live &= !lanes.occluded(p, id, live, stats);
-                        if live == 0 {
-                            break;
-                        }
-                    } else {
-                        lanes.intersect(p, id, live, stats);
-                    }
-                }
-                for (i, &slot) in b.slot[..b.len()].iter().enumerate() {
-                    let hit = if ANY {
-                        (live >> i & 1 == 0).then_some(crate::bundle::BLOCKED)
-                    } else {
-                        lanes.hit(i)
-                    };
-                    answer(order[slot as usize] as usize, hit);
-                }
-            }
-        });
+    /// The valid primitives it keeps, in input order.
+    pub fn prims(&self) -> &[P] {
+        &self.prims
+    }
+
+    /// The input index of each primitive of [`prims`](BruteForce::prims), increasing.
+    pub fn ids(&self) -> &[u32] {
+        &self.ids
+    }
+
+    /// The reference over primitives already filtered and numbered (a saved reference read
+    /// back): `prims[i]` has input index `ids[i]`. Nothing is checked here; a loader checks
+    /// that the primitives are valid and the indices increase before the reference answers.
+    pub fn from_parts(prims: Vec<P>, ids: Vec<u32>) -> Self {
+        let bounds = prims.iter().fold(Aabb::EMPTY, |b, p| b.union(p.bounds()));
+        Self { prims, ids, bounds }
     }
 }
 
@@ -100,27 +69,6 @@ impl<P: Primitive> Accel for BruteForce<P> {
                 return;
             }
         }
-    }
-
-    /// Every primitive against a bundle's lanes at once ([`Lanes`], the watertight test over
-    /// eight or sixteen lanes per vector step, each lane with its single ray's arithmetic), so
-    /// each answer is the single-ray one, bit for bit. The rays are first put in order of
-    /// their direction octant, whatever order they come in: brute force tests every
-    /// primitive for every ray, so unlike a structure it gains from a full bundle whether or
-    /// not its rays are coherent.
-    fn intersect_bundle_with<S: Stats>(
-        &self,
-        rays: &[Ray],
-        out: &mut [Option<Hit>],
-        stats: &mut S,
-    ) {
-        let n = rays.len().min(out.len());
-        self.bundles::<S, false>(&rays[..n], stats, |slot, hit| out[slot] = hit);
-    }
-
-    fn occluded_bundle_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
-        let n = rays.len().min(out.len());
-        self.bundles::<S, true>(&rays[..n], stats, |slot, hit| out[slot] = hit.is_some());
     }
 
     fn bounds(&self) -> Aabb {

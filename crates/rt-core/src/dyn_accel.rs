@@ -4,12 +4,13 @@ use crate::query::{AllHits, AnyHit, ClosestHit, Filtered, RayOfBox, RayQuery};
 use crate::trace::Trace;
 use crate::{
     Aabb, Accel, BallQuery, BoxQuery, BuildStats, Counters, Hit, NoStats, PointHit, PrimHit,
-    Primitive, Ray, Region, SignedPoint, WindingTree,
+    Primitive, Ray, Region,
 };
 use glam::Vec3;
+use std::ops::ControlFlow;
 
 /// Any [`Accel`] as a trait object: a structure chosen at run time, bottom levels of several
-/// kinds in one two-level scene ([`Instance`](crate::Instance)), a row of the shootout, the
+/// kinds in one two-level scene (rt-instance's `Instance`), a row of the shootout, the
 /// structure a renderer traces. Every `Accel` is one.
 ///
 /// Every method ends in `_dyn` or `_all`, so that calling a structure's own [`Accel`] methods
@@ -94,6 +95,24 @@ pub trait DynAccel<P>: Send + Sync {
         by_boxes(self, ray, &mut query, counters);
         query.inner.occluded()
     }
+    /// [`Accel::ray_query`] for a query behind a trait object ([`DynRayQuery`]), counted into
+    /// `counters` if given: the structure's one ray walk, for any query. The default, for
+    /// wrappers that implement only the box (or ball) query, runs [`Accel::ray_query`]'s
+    /// default through [`box_query_dyn`](DynAccel::box_query_dyn).
+    fn ray_query_dyn(&self, ray: &Ray, query: &mut dyn DynRayQuery, counters: Option<&mut Counters>)
+    where
+        P: Primitive,
+    {
+        with_flags(
+            query,
+            ByBoxes {
+                s: self,
+                ray,
+                counters,
+                prim: std::marker::PhantomData,
+            },
+        );
+    }
     /// One closest-hit (`any == false`) or any-hit query with every step of its walk recorded
     /// ([`Trace`]); an any-hit answer is `Some` with primitive `u32::MAX` when occluded.
     fn trace_dyn(&self, ray: &Ray, any: bool) -> (Option<Hit>, Trace);
@@ -139,23 +158,6 @@ pub trait DynAccel<P>: Send + Sync {
         out: &mut [Option<PointHit>],
         counters: Option<&mut Counters>,
     );
-    /// [`Accel::signed_distance`] for each `(point, max_distance)` into the same slot of `out`
-    /// (as many as both have), the closest-point walks counted into `counters` if given. The
-    /// default, for wrappers, signs [`closest_points_all`](DynAccel::closest_points_all)'s
-    /// answers with [`WindingTree::is_inside`].
-    fn signed_distances_all(
-        &self,
-        sign: &WindingTree,
-        points: &[(Vec3, f32)],
-        out: &mut [Option<SignedPoint>],
-        counters: Option<&mut Counters>,
-    ) {
-        let mut near = vec![None; points.len().min(out.len())];
-        self.closest_points_all(points, &mut near, counters);
-        for ((o, &(p, _)), near) in out.iter_mut().zip(points).zip(near) {
-            *o = near.map(|near| SignedPoint::signed(near, sign.is_inside(p)));
-        }
-    }
 }
 
 /// A ray query through a structure's box query: [`Accel::ray_query`]'s default, for a
@@ -168,6 +170,94 @@ fn by_boxes<P: Primitive, D: DynAccel<P> + ?Sized, Q: RayQuery>(
 ) {
     if let Some(mut q) = RayOfBox::new(ray, query, &s.bounds_dyn()) {
         s.box_query_dyn(&mut q, counters);
+    }
+}
+
+/// A [`RayQuery`] behind a trait object: its constants as methods, so that a structure seen as a
+/// [`DynAccel`] runs any query ([`DynAccel::ray_query_dyn`]). Every `RayQuery` is one.
+pub trait DynRayQuery {
+    /// [`RayQuery::OCCLUSION`].
+    fn occlusion(&self) -> bool;
+    /// [`RayQuery::REPEATABLE`].
+    fn repeatable(&self) -> bool;
+    /// [`RayQuery::t_far`].
+    fn t_far(&self) -> f32;
+    /// [`RayQuery::offer`].
+    fn offer(&mut self, prim: u32, hit: PrimHit) -> ControlFlow<()>;
+}
+
+impl<Q: RayQuery> DynRayQuery for Q {
+    fn occlusion(&self) -> bool {
+        Q::OCCLUSION
+    }
+    fn repeatable(&self) -> bool {
+        Q::REPEATABLE
+    }
+    fn t_far(&self) -> f32 {
+        RayQuery::t_far(self)
+    }
+    fn offer(&mut self, prim: u32, hit: PrimHit) -> ControlFlow<()> {
+        RayQuery::offer(self, prim, hit)
+    }
+}
+
+/// A [`DynRayQuery`] as a [`RayQuery`] with its constants `O` ([`RayQuery::OCCLUSION`]) and `R`
+/// ([`RayQuery::REPEATABLE`]).
+struct Flagged<'a, const O: bool, const R: bool>(&'a mut dyn DynRayQuery);
+
+impl<const O: bool, const R: bool> RayQuery for Flagged<'_, O, R> {
+    const OCCLUSION: bool = O;
+    const REPEATABLE: bool = R;
+    #[inline]
+    fn t_far(&self) -> f32 {
+        self.0.t_far()
+    }
+    #[inline]
+    fn offer(&mut self, prim: u32, hit: PrimHit) -> ControlFlow<()> {
+        self.0.offer(prim, hit)
+    }
+}
+
+/// A walk to run with a query of a type known at compile time.
+trait QueryWalk {
+    fn run<Q: RayQuery>(self, query: &mut Q);
+}
+
+/// Runs `walk` with `query` as a [`RayQuery`] whose constants are the query's flags: one of four
+/// instances of the walk, chosen at run time.
+fn with_flags(query: &mut dyn DynRayQuery, walk: impl QueryWalk) {
+    match (query.occlusion(), query.repeatable()) {
+        (false, false) => walk.run(&mut Flagged::<false, false>(query)),
+        (false, true) => walk.run(&mut Flagged::<false, true>(query)),
+        (true, false) => walk.run(&mut Flagged::<true, false>(query)),
+        (true, true) => walk.run(&mut Flagged::<true, true>(query)),
+    }
+}
+
+/// [`DynAccel::ray_query_dyn`]'s default: the ray query through the box query.
+struct ByBoxes<'a, P, D: ?Sized> {
+    s: &'a D,
+    ray: &'a Ray,
+    counters: Option<&'a mut Counters>,
+    prim: std::marker::PhantomData<P>,
+}
+
+impl<P: Primitive, D: DynAccel<P> + ?Sized> QueryWalk for ByBoxes<'_, P, D> {
+    fn run<Q: RayQuery>(self, query: &mut Q) {
+        by_boxes(self.s, self.ray, query, self.counters);
+    }
+}
+
+/// A structure's own ray walk, counted into `counters` if given.
+struct Walk<'a, A> {
+    a: &'a A,
+    ray: &'a Ray,
+    counters: Option<&'a mut Counters>,
+}
+
+impl<A: Accel> QueryWalk for Walk<'_, A> {
+    fn run<Q: RayQuery>(self, query: &mut Q) {
+        ray_query_counted(self.a, self.ray, query, self.counters);
     }
 }
 
@@ -273,6 +363,22 @@ impl<A: Accel> DynAccel<A::Prim> for A {
         query.inner.occluded()
     }
 
+    fn ray_query_dyn(
+        &self,
+        ray: &Ray,
+        query: &mut dyn DynRayQuery,
+        counters: Option<&mut Counters>,
+    ) {
+        with_flags(
+            query,
+            Walk {
+                a: self,
+                ray,
+                counters,
+            },
+        );
+    }
+
     fn trace_dyn(&self, ray: &Ray, any: bool) -> (Option<Hit>, Trace) {
         let mut trace = Trace::default();
         let answer = if any {
@@ -338,22 +444,6 @@ impl<A: Accel> DynAccel<A::Prim> for A {
         match counters {
             Some(c) => pairs.for_each(|(o, &(p, max))| *o = self.closest_point_with(p, max, c)),
             None => pairs.for_each(|(o, &(p, max))| *o = self.closest_point(p, max)),
-        }
-    }
-
-    fn signed_distances_all(
-        &self,
-        sign: &WindingTree,
-        points: &[(Vec3, f32)],
-        out: &mut [Option<SignedPoint>],
-        counters: Option<&mut Counters>,
-    ) {
-        let pairs = out.iter_mut().zip(points);
-        match counters {
-            Some(c) => pairs.for_each(|(o, &(p, max))| {
-                *o = self.signed_distance_with(sign, p, max, c);
-            }),
-            None => pairs.for_each(|(o, &(p, max))| *o = self.signed_distance(sign, p, max)),
         }
     }
 }

@@ -153,7 +153,7 @@ impl<'a> IndexedTriangles<'a> {
         }
         // Both views are of runs of three 4-byte scalars, so alignment always holds, and the
         // lengths were checked above: neither can fail or drop an element.
-        let positions: &[Vec3] = crate::pod::vec3s(positions);
+        let positions: &[Vec3] = rt_pod::vec3s(positions);
         let indices: &[[u32; 3]] = bytemuck::cast_slice(indices);
         Self::new(positions, indices)
     }

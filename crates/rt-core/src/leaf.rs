@@ -108,3 +108,45 @@ pub fn offer_once<P, Q: BoxQuery<P>, S: Stats>(
     }
     ControlFlow::Continue(())
 }
+
+/// The one ray walk of a structure that lists a primitive in several cells (a kd-tree, a grid,
+/// an octree), over a record of the primitives it has tested ([`Seen`]): [`walk_once`] runs it
+/// with the record its query needs.
+pub trait CellWalk {
+    /// How many primitives the cells index (primitive indices are below it).
+    fn prim_count(&self) -> usize;
+
+    /// The walk for `query`, which skips the primitives `seen` has seen (see
+    /// [`test_primitives`]).
+    fn walk<Q: RayQuery, S: Stats, M: Seen>(
+        &self,
+        ray: &Ray,
+        query: &mut Q,
+        seen: &mut M,
+        stats: &mut S,
+    );
+}
+
+/// [`Accel::ray_query`](crate::Accel::ray_query) of a [`CellWalk`]: the walk with a
+/// [`Mailbox`] of the last `N` primitives for a [repeatable](RayQuery::REPEATABLE) query (a
+/// closest or any hit, which a second test cannot change), else with [`Visited`], every
+/// primitive (all hits, counts and filters see each hit once). An invalid ray walks nothing.
+#[inline(always)]
+pub fn walk_once<W: CellWalk, const N: usize, Q: RayQuery, S: Stats>(
+    cells: &W,
+    ray: &Ray,
+    query: &mut Q,
+    stats: &mut S,
+) {
+    // Outside the precondition (NaN, huge origins, ...): answer at once, walk nothing.
+    if !ray.is_valid() {
+        return;
+    }
+    if Q::REPEATABLE {
+        cells.walk(ray, query, &mut Mailbox::<N>::new(), stats);
+    } else {
+        Visited::with(cells.prim_count(), |seen| {
+            cells.walk(ray, query, seen, stats)
+        });
+    }
+}

@@ -1,9 +1,23 @@
 //! The contract of the `rt-accel` structures: rays, boxes, primitives, the [`Accel`] trait every
-//! acceleration structure implements, traversal [`Stats`], the [`BruteForce`] reference,
-//! geometry sources, closest points, the winding number and signed distance, instancing, and
-//! saved structures ([`persist`]). It depends on glam and bytemuck only.
+//! acceleration structure implements and the queries it answers (closest and any hit, ray
+//! queries of one's own, closest points, box overlap), traversal [`Stats`] and traces, and the
+//! [`BruteForce`] reference that defines every right answer. It depends on glam, bytemuck and
+//! two small crates it re-exports, rt-par ([`par`]: the builders' parallel patterns, on rayon
+//! with the `parallel` feature) and rt-pod ([`pod_struct!`]).
 //!
-//! Around it: `rt-scene` loads meshes (OBJ, PLY, glTF), makes procedural scenes and has the
+//! A student who writes a structure reads this crate and implements six methods of [`Accel`]
+//! (`presets`, `build`, `bounds`, `ball_query`, `memory_bytes`, `build_stats`); every query then
+//! answers, and the conformance kit checks it. Everything a fast structure shares beyond that
+//! lives beside it, in crates a structure opts into:
+//!
+//! | crate | what | moved from here |
+//! | --- | --- | --- |
+//! | `rt-simd` | the run-time instruction set, lane vectors, the watertight, Möller–Trumbore and slab kernels written once over the lane width, ray bundles (`Bundle`, `Lanes`, `walk_groups`) | `rt_core::bundle`'s bundles and lanes, `Bundle`, `BUNDLE_LANES`, `LaneBounds` |
+//! | `rt-persist` | saved structures: `Persist`, the checked file framing | `rt_core::persist` |
+//! | `rt-instance` | two-level scenes: `Instance`, `TwoLevel`, `LinearInstances` | `rt_core::Instance`, ... |
+//! | `rt-sdf` | inside, outside and signed distance: `WindingTree`, `SignedDistance` | `rt_core::winding`, `Accel::signed_distance`, `Accel::inside_by_parity` |
+//!
+//! Around them: `rt-scene` loads meshes (OBJ, PLY, glTF), makes procedural scenes and has the
 //! camera; `rt-conformance` is the kit that checks any structure (yours too) against brute
 //! force; the structures are crates of their own (`rt-bvh`, `rt-kdtree`, `rt-grid`,
 //! `rt-hgrid`, `rt-octree`).
@@ -38,8 +52,9 @@
 //! # Many rays at once
 //! [`Accel::intersect_bundle`] and [`Accel::occluded_bundle`] answer a slice of rays, each
 //! exactly as the single-ray query would; structures that trace coherent rays together (a
-//! camera's tiles, a light's shadow rays) override them. [`bundle::intersect_frame`] traces a
-//! whole frame that way on all threads. See the [`bundle`] module.
+//! camera's tiles, a light's shadow rays) override them with rt-simd's bundles.
+//! [`bundle::intersect_frame`] traces a whole frame that way on all threads. See the
+//! [`bundle`] module.
 //!
 //! # Closest points
 //! [`Accel::closest_point`] finds the primitive nearest to a point (a [`PointHit`]: index, point,
@@ -53,20 +68,6 @@
 //! stops at the first. Structures implement one traversal, [`Accel::box_query`], over a
 //! [`BoxQuery`] that may end the walk; [`OverlapQuery`] is the standard one.
 //!
-//! # Inside, outside and signed distance
-//! [`WindingTree`] answers whether a point is inside a triangle mesh by its generalised
-//! winding number, robust to holes and cracks, fast through Barill et al.'s cluster expansion
-//! with a stated error bound; [`Accel::signed_distance`] puts that sign on the closest-point
-//! distance, and [`Accel::inside_by_parity`] is the simple alternative that counts the
-//! crossings of rays. See the [`winding`] module.
-//!
-//! # Instances
-//! A two-level scene places built structures (any [`Accel`], behind [`DynAccel`], kinds mixed) with
-//! affine transforms: [`Instance`], [`TwoLevel`], the reference [`LinearInstances`], and rt-bvh's
-//! `Instances` with a BVH over the instances. Hits ([`InstanceHit`]) name the instance, its id and
-//! the primitive in the bottom level's own input; see the module documentation of [`instance`] for
-//! what is exact and what rounds.
-//!
 //! # Conventions
 //! - A hit is the smallest `t` in the ray's closed interval `[t_min, t_max]`; equal `t` goes to
 //!   the smaller primitive index ([`Hit::beats`]). The answer is unique, so structures can be
@@ -79,8 +80,8 @@
 //!
 //! # Features
 //! - `parallel` (off here; the structure crates turn it on by default): the builders' parallel
-//!   patterns ([`par`]) run on rayon's threads. Without it they run in order on the calling
-//!   thread and give the same structures.
+//!   patterns ([`par`]) and [`bundle::intersect_frame`] run on rayon's threads. Without it they
+//!   run in order on the calling thread and give the same answers.
 //!
 //! Measurements of every structure are on one generated page, `docs/results.md` in the
 //! repository (date, commit, CPU; written by `cargo xtask results`).
@@ -94,52 +95,43 @@ mod clip;
 mod closest;
 mod cost;
 mod dyn_accel;
+mod event;
 mod geometry;
-pub mod instance;
-mod lanes;
+mod hit;
 pub mod leaf;
 mod mailbox;
 mod mesh;
 mod overlap;
-pub mod par;
-pub mod persist;
-mod pod;
+mod point;
 mod primitive;
 pub mod query;
 mod ray;
 mod refit;
 mod rng;
 mod shape;
-mod simd;
 mod sphere;
 mod stack;
 mod stats;
 mod surface;
 pub mod trace;
 mod triangle;
-pub mod winding;
 
 pub use aabb::{Aabb, NEAR_TIE, SLAB_FAR_SCALE};
-pub use accel::{Accel, BuildStats, Hit, Region, ValidationError};
+pub use accel::{Accel, BuildStats, Region, ValidationError};
 pub use brute::BruteForce;
-pub use bundle::{BUNDLE_LANES, Bundle, LaneBounds};
 pub use clip::{clip_triangle_bounds, split_triangle_bounds};
-pub use closest::{
-    BallQuery, ClosestPointQuery, Feature, PointHit, closest_feature_on_triangle,
-    closest_point_on_triangle, point_distance,
-};
+pub use closest::{BallQuery, ClosestPointQuery};
 pub use cost::{PredictedCost, predicted_cost};
-pub use dyn_accel::DynAccel;
+pub use dyn_accel::{DynAccel, DynRayQuery};
 pub use geometry::{Geometry, IndexedTriangles};
-pub use instance::{
-    Instance, InstanceError, InstanceHit, InstancePointHit, InstancePointQuery, InstanceTransform,
-    LinearInstances, TransformPrimitive, TwoLevel, bottom_bytes,
-    closest_feature_on_transformed_triangle, closest_point_on_transformed_triangle, scene_margins,
-};
+pub use hit::{Hit, PrimHit};
 pub use mailbox::{Mailbox, Visited};
 pub use mesh::{Mesh, MeshError, Shading};
 pub use overlap::{BoxQuery, OverlapQuery};
-pub use primitive::{PrimHit, Primitive, TriangleTest, valid_bounds, valid_primitives};
+pub use point::{
+    Feature, PointHit, closest_feature_on_triangle, closest_point_on_triangle, point_distance,
+};
+pub use primitive::{Primitive, TriangleTest, valid_bounds, valid_primitives};
 pub use query::{AllHits, AnyHit, ClosestHit, CountHits, Filtered, RayQuery};
 pub use ray::Ray;
 pub use refit::{Refit, RefitError};
@@ -151,9 +143,6 @@ pub use stats::{Counters, NoStats, Stats};
 pub use surface::{OFFSET_ULPS, SurfacePoint, error_bound, offset_origin};
 pub use trace::{Event, Outcome, Place, Take, Trace};
 pub use triangle::{MtTriangle, Shear, Triangle, moller_trumbore_edges};
-pub use winding::{
-    NotATriangle, SignedPoint, Winding, WindingTree, solid_angle, winding_number_exact,
-};
 
 /// Re-exported so users name the same `Vec3` the library uses.
 pub use glam;
@@ -162,8 +151,13 @@ pub use glam;
 /// see [`pod_struct!`]).
 pub use bytemuck;
 
-#[doc(hidden)]
-pub use pod::PodField as __PodField;
+/// The builders' parallel patterns, from the `rt-par` crate: on rayon's threads with the
+/// feature `parallel`, in order on the calling thread without, the same values either way.
+pub use rt_par as par;
+
+/// Plain-old-data structs checked at compile time without bytemuck's derive macro, from the
+/// `rt-pod` crate.
+pub use rt_pod::pod_struct;
 
 /// The README's example, compiled and run as a doctest so that it stays true.
 #[cfg(doctest)]

@@ -75,6 +75,12 @@ pub trait RayQuery {
     /// offered once.
     const REPEATABLE: bool = false;
 
+    /// True for a query to which a hit on a bit-identical copy of a primitive changes nothing
+    /// once the primitive's own hit was offered (the copy has a larger index and the same `t`,
+    /// `u`, `v`), as for a closest hit (ties go to the smaller index) or an any hit. A
+    /// structure that stores such copies once (rt-bvh does) then offers the stored one alone.
+    const COPIES_CHANGE_NOTHING: bool = false;
+
     /// The far end of the part of the ray still wanted: hits beyond it are not offered, and
     /// boxes or cells that start beyond it are skipped. It starts at or below the ray's
     /// `t_max` and must never grow during a walk.
@@ -89,6 +95,7 @@ pub trait RayQuery {
 impl<Q: RayQuery + ?Sized> RayQuery for &mut Q {
     const OCCLUSION: bool = Q::OCCLUSION;
     const REPEATABLE: bool = Q::REPEATABLE;
+    const COPIES_CHANGE_NOTHING: bool = Q::COPIES_CHANGE_NOTHING;
     #[inline(always)]
     fn t_far(&self) -> f32 {
         (**self).t_far()
@@ -144,6 +151,7 @@ impl ClosestHit {
 
 impl RayQuery for ClosestHit {
     const REPEATABLE: bool = true;
+    const COPIES_CHANGE_NOTHING: bool = true;
     #[inline(always)]
     fn t_far(&self) -> f32 {
         self.best.t
@@ -197,6 +205,7 @@ impl AnyHit {
 impl RayQuery for AnyHit {
     const OCCLUSION: bool = true;
     const REPEATABLE: bool = true;
+    const COPIES_CHANGE_NOTHING: bool = true;
     #[inline(always)]
     fn t_far(&self) -> f32 {
         self.t_max
@@ -341,6 +350,59 @@ impl RayQuery for CountHits {
     fn offer(&mut self, _: u32, _: PrimHit) -> ControlFlow<()> {
         self.count += 1;
         ControlFlow::Continue(())
+    }
+}
+
+/// A query offered each primitive's hit once, for a walk that may meet a primitive again (one
+/// listed in several cells) and remembers only the last few it tested: it passes the first
+/// offer of each primitive to the inner query and drops the others, so it is
+/// [repeatable](RayQuery::REPEATABLE) whatever the inner query is. The labs' walks run
+/// all hits, counts and filters through it; the structures remember every primitive with
+/// [`Visited`](crate::Visited) instead ([`leaf::walk_once`](crate::leaf::walk_once)).
+///
+/// ```
+/// use rt_core::query::{AllHits, Deduplicated, RayQuery};
+/// use rt_core::{PrimHit, Ray, glam::Vec3};
+/// let ray = Ray::new(Vec3::ZERO, Vec3::Z);
+/// let mut all = AllHits::new(&ray);
+/// let mut once = Deduplicated::new(&mut all);
+/// let hit = PrimHit { t: 1.0, u: 0.25, v: 0.25 };
+/// for prim in [4, 7, 4] {
+///     let _ = once.offer(prim, hit); // primitive 4 met again in a second cell
+/// }
+/// assert_eq!(all.hits().len(), 2);
+/// ```
+#[derive(Debug)]
+pub struct Deduplicated<Q> {
+    inner: Q,
+    offered: Vec<u32>,
+}
+
+impl<Q: RayQuery> Deduplicated<Q> {
+    /// `inner`, offered each primitive once.
+    pub fn new(inner: Q) -> Self {
+        Self {
+            inner,
+            offered: Vec::new(),
+        }
+    }
+}
+
+impl<Q: RayQuery> RayQuery for Deduplicated<Q> {
+    const OCCLUSION: bool = Q::OCCLUSION;
+    const REPEATABLE: bool = true;
+    #[inline]
+    fn t_far(&self) -> f32 {
+        self.inner.t_far()
+    }
+    #[inline]
+    fn offer(&mut self, prim: u32, hit: PrimHit) -> ControlFlow<()> {
+        // A ray hits few primitives: a scan of those offered is enough.
+        if self.offered.contains(&prim) {
+            return ControlFlow::Continue(());
+        }
+        self.offered.push(prim);
+        self.inner.offer(prim, hit)
     }
 }
 

@@ -71,16 +71,15 @@ impl Ray {
         }
     }
 
-    /// A ray from parts taken from another ray (its reciprocal included), as a bundle keeps
-    /// them: no division, the same bits.
+    /// A ray from parts taken from another ray, its reciprocal direction included, as a ray
+    /// bundle keeps them (`rt_simd::Bundle`): no division, the same bits. `inv_dir` must be
+    /// the reciprocal a ray made of `dir` holds ([`Ray::inv_dir`]); debug builds check it.
     #[inline(always)]
-    pub(crate) fn from_parts(
-        origin: Vec3,
-        dir: Vec3,
-        inv_dir: Vec3,
-        t_min: f32,
-        t_max: f32,
-    ) -> Self {
+    pub fn from_parts(origin: Vec3, dir: Vec3, inv_dir: Vec3, t_min: f32, t_max: f32) -> Self {
+        debug_assert!(
+            inv_dir.to_array().map(f32::to_bits) == dir.recip().to_array().map(f32::to_bits),
+            "from_parts: {inv_dir} is not the reciprocal of {dir}"
+        );
         Self {
             origin,
             dir,

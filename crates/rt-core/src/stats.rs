@@ -64,7 +64,7 @@ pub trait Stats {
     }
     /// One step of the walk, with its context; called only when [`Stats::TRACE`] is true.
     #[inline(always)]
-    fn event(&mut self, event: crate::trace::Event) {
+    fn event(&mut self, event: crate::event::Event) {
         let _ = event;
     }
 }

@@ -1,6 +1,6 @@
 //! Triangles, with the Möller–Trumbore and the watertight ray–triangle tests.
 
-use crate::{Aabb, PrimHit, Primitive, Ray, SurfacePoint, TriangleTest};
+use crate::{PrimHit, Ray, SurfacePoint};
 use glam::{DVec3, Vec3};
 
 crate::pod_struct! {
@@ -219,68 +219,6 @@ impl Shear {
     }
 }
 
-impl Primitive for Triangle {
-    #[inline]
-    fn bounds(&self) -> Aabb {
-        Aabb::new(
-            self.v0.min(self.v1).min(self.v2),
-            self.v0.max(self.v1).max(self.v2),
-        )
-    }
-
-    #[inline]
-    fn centroid(&self) -> Vec3 {
-        (self.v0 + self.v1 + self.v2) * (1.0 / 3.0)
-    }
-
-    fn is_valid(&self) -> bool {
-        self.v0.is_finite()
-            && self.v1.is_finite()
-            && self.v2.is_finite()
-            && self.normal() != Vec3::ZERO
-    }
-
-    #[inline]
-    fn clip_bounds(&self, cell: &Aabb) -> Option<Aabb> {
-        crate::clip_triangle_bounds([self.v0, self.v1, self.v2], cell)
-    }
-
-    #[inline]
-    fn split_bounds(&self, cell: &Aabb, axis: usize, pos: f32) -> (Option<Aabb>, Option<Aabb>) {
-        crate::split_triangle_bounds([self.v0, self.v1, self.v2], cell, axis, pos)
-    }
-
-    #[inline]
-    fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
-        self.intersect_watertight(ray, t_max)
-    }
-
-    #[inline]
-    fn as_triangle(&self) -> Option<(Triangle, TriangleTest)> {
-        Some((*self, TriangleTest::Watertight))
-    }
-
-    /// [`closest_point_on_triangle`](crate::closest_point_on_triangle) with the edges
-    /// `v1 - v0` and `v2 - v0`.
-    #[inline]
-    fn closest_point(&self, p: Vec3) -> Vec3 {
-        self.closest_feature(p).0
-    }
-
-    #[inline]
-    fn closest_feature(&self, p: Vec3) -> (Vec3, crate::Feature) {
-        crate::closest_feature_on_triangle(self.v0, self.v1 - self.v0, self.v2 - self.v0, p)
-    }
-
-    /// The point interpolated from the vertices with the barycentrics `u`, `v` (not
-    /// `ray.at(t)`, whose error grows with the distance travelled), the unit normal of the
-    /// winding, and an error bound relative to the largest vertex coordinate.
-    #[inline]
-    fn surface(&self, _ray: &Ray, _t: f32, u: f32, v: f32) -> SurfacePoint {
-        self.surface_at(u, v)
-    }
-}
-
 impl Triangle {
     /// The [`SurfacePoint`] at barycentrics `u` (weight of `v1`) and `v` (weight of `v2`).
     #[inline]
@@ -319,58 +257,10 @@ impl MtTriangle {
     }
 }
 
-impl Primitive for MtTriangle {
-    /// The box around both the vertices and their [`edge_form`](MtTriangle::edge_form), so
-    /// that a box overlap found on the edge form lies in every box built around the triangle.
-    #[inline]
-    fn bounds(&self) -> Aabb {
-        self.0.bounds().union(Aabb::from_points(&self.edge_form()))
-    }
-    #[inline]
-    fn centroid(&self) -> Vec3 {
-        self.0.centroid()
-    }
-    fn is_valid(&self) -> bool {
-        self.0.is_valid()
-    }
-    #[inline]
-    fn clip_bounds(&self, cell: &Aabb) -> Option<Aabb> {
-        crate::clip_triangle_bounds(self.edge_form(), cell)
-    }
-    #[inline]
-    fn split_bounds(&self, cell: &Aabb, axis: usize, pos: f32) -> (Option<Aabb>, Option<Aabb>) {
-        crate::split_triangle_bounds(self.edge_form(), cell, axis, pos)
-    }
-    /// Clips the [`edge_form`](MtTriangle::edge_form), as rt-bvh's packs do.
-    #[inline]
-    fn overlaps_box(&self, b: &Aabb) -> bool {
-        crate::clip_triangle_bounds(self.edge_form(), b).is_some()
-    }
-    #[inline]
-    fn intersect(&self, ray: &Ray, t_max: f32) -> Option<PrimHit> {
-        self.0.intersect_moller_trumbore(ray, t_max)
-    }
-    #[inline]
-    fn as_triangle(&self) -> Option<(Triangle, TriangleTest)> {
-        Some((self.0, TriangleTest::MollerTrumbore))
-    }
-    #[inline]
-    fn closest_point(&self, p: Vec3) -> Vec3 {
-        self.0.closest_point(p)
-    }
-    #[inline]
-    fn closest_feature(&self, p: Vec3) -> (Vec3, crate::Feature) {
-        self.0.closest_feature(p)
-    }
-    #[inline]
-    fn surface(&self, _ray: &Ray, _t: f32, u: f32, v: f32) -> SurfacePoint {
-        self.0.surface_at(u, v)
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::Primitive;
     use proptest::prelude::*;
 
     fn tri() -> Triangle {

@@ -38,8 +38,8 @@
 use crate::Grid;
 use crate::cell::GridShape;
 use crate::dda::{RayAxes, first_cell};
-use rt_core::bundle::{BUNDLE_LANES, Bundle, LaneMailbox, Lanes, test_primitives};
 use rt_core::{Hit, Primitive, Ray, SLAB_FAR_SCALE, Stats};
+use rt_simd::bundle::{BUNDLE_LANES, Bundle, LaneMailbox, Lanes, test_primitives};
 
 /// The most cells per slice a bundle's rectangle may widen by, summed over its two axes, for the
 /// bundle to walk together ([`coherent`]).
@@ -77,7 +77,7 @@ const WIDE_RECTANGLE: f32 = 9.0;
 const MAX_CELL_MASKS: usize = 16;
 
 impl<P: Primitive> Grid<P> {
-    /// The bundle queries ([`walk_groups`](rt_core::bundle::walk_groups)): each coherent
+    /// The bundle queries ([`walk_groups`](rt_simd::bundle::walk_groups)): each coherent
     /// bundle walked slice by slice, every other ray walked alone. Calls `answer(slot, hit)`
     /// for each of the first `slots` rays (for `ANY`, `Some` when the ray is blocked).
     pub(crate) fn bundle_query<S: Stats, const ANY: bool>(
@@ -87,11 +87,11 @@ impl<P: Primitive> Grid<P> {
         stats: &mut S,
         answer: impl FnMut(usize, Option<Hit>),
     ) {
-        rt_core::bundle::walk_groups::<S, ANY>(
+        rt_simd::bundle::walk_groups::<S, ANY>(
             rays,
             slots,
             stats,
-            |ray, stats| rt_core::bundle::single::<_, S, ANY>(self, ray, stats),
+            |ray, stats| rt_simd::bundle::single::<_, S, ANY>(self, ray, stats),
             |b| {
                 b.route(&self.shape.bounds(), |b| {
                     !self.refs.is_empty() && coherent(&self.shape, b)

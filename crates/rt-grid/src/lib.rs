@@ -40,9 +40,9 @@
 //! pixel tiles, shadow rays towards one light) together by coherent grid traversal (Wald, Ize,
 //! Kensler, Knoll & Parker 2006): a bundle walks the grid slice by slice along its major axis,
 //! covers in each slice the rectangle of cells its lanes cross, and tests each primitive there
-//! once for all lanes, eight lanes per vector step ([`rt_core::bundle::Lanes`]). Primitives
+//! once for all lanes, eight lanes per vector step ([`rt_simd::Lanes`]). Primitives
 //! whose box no lane can enter are skipped with one interval test for the whole bundle
-//! ([`Bundle::may_enter`](rt_core::Bundle::may_enter)), Wald et al.'s frustum culling, which is
+//! ([`Bundle::may_enter`](rt_simd::Bundle::may_enter)), Wald et al.'s frustum culling, which is
 //! what pays most where cells hold many primitives (the teapot in a stadium). Rays in spread-out
 //! directions, whose rectangle would widen with every slice, and bundles that turn out to cost
 //! more than their single rays would, go singly. Each ray answers exactly as its single-ray
@@ -65,11 +65,11 @@
 //! references and tests several times more on scenes of large triangles.
 //!
 //! # Saving and loading
-//! [`Persist`](rt_core::persist::Persist) writes a built grid to a versioned file and reads it back
+//! [`Persist`] writes a built grid to a versioned file and reads it back
 //! without rebuilding: the box and resolution, the cell offsets, the references and the primitives
 //! (the sections are listed in [`persist`]). Loading checks the file's framing and checksum, then
 //! runs [`Grid::validate`], so a truncated, damaged or hostile file is refused with a typed
-//! [`LoadError`](rt_core::persist::LoadError) and a loaded grid answers every query bit for bit as
+//! [`LoadError`] and a loaded grid answers every query bit for bit as
 //! the saved one.
 //!
 //! # Measurements
@@ -111,8 +111,10 @@ mod validate;
 pub use builder::cells_overlapping;
 pub use cell::{GridShape, MAX_RESOLUTION};
 pub use rt_core::ValidationError;
+/// Saving and loading, re-exported so that a user of this crate alone can save and load.
+pub use rt_persist::{LoadError, Persist};
 
-use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, RayQuery, Stats};
+use rt_core::{Accel, BuildStats, Primitive};
 
 /// Build and traversal parameters. `Default` is [`GridParams::standard`].
 #[derive(Clone, Debug, PartialEq)]
@@ -213,14 +215,11 @@ impl<P: Primitive> Accel for Grid<P> {
 
     /// Builds the grid; invalid primitives (see [`Primitive::is_valid`]) are left out.
     ///
+    /// Copies the primitives once, into the vector the leaves index, and builds over that.
+    ///
     /// # Panics
     /// If the grid would hold more than 2³² - 1 references (far beyond what `max_cells` and
     /// memory allow for triangles).
-    fn build(prims: &[P], params: &GridParams) -> Self {
-        Self::build_from(prims, params)
-    }
-
-    /// Copies the primitives once, into the vector the leaves index, and builds over that.
     fn build_from<G: rt_core::Geometry<Prim = P> + ?Sized>(
         geometry: &G,
         params: &GridParams,
@@ -238,28 +237,6 @@ impl<P: Primitive> Accel for Grid<P> {
         }
     }
 
-    #[inline]
-    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
-        self.query(ray, query, stats);
-    }
-
-    /// Coherent grid traversal, slice by slice (`bundle.rs`).
-    fn intersect_bundle_with<S: Stats>(
-        &self,
-        rays: &[Ray],
-        out: &mut [Option<Hit>],
-        stats: &mut S,
-    ) {
-        self.bundle_query::<S, false>(rays, out.len(), stats, |slot, hit| out[slot] = hit);
-    }
-
-    /// Coherent grid traversal, slice by slice (`bundle.rs`).
-    fn occluded_bundle_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
-        self.bundle_query::<S, true>(rays, out.len(), stats, |slot, hit| {
-            out[slot] = hit.is_some()
-        });
-    }
-
     fn bounds(&self) -> rt_core::Aabb {
         if self.valid_prims == 0 {
             rt_core::Aabb::EMPTY
@@ -268,25 +245,11 @@ impl<P: Primitive> Accel for Grid<P> {
         }
     }
 
-    /// Cells in growing shells around the centre ([`nearest::shells`]).
-    fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
-        self.ball(query, stats);
-    }
-
-    /// The block of cells the query box covers ([`overlap::cells_meeting`]).
-    fn box_query<Q: rt_core::BoxQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
-        let _ = self.box_cells(query, stats);
-    }
-
     fn memory_bytes(&self) -> usize {
         size_of::<Self>()
             + self.cells.capacity() * size_of::<u32>()
             + self.refs.capacity() * size_of::<u32>()
             + self.prims.capacity() * size_of::<P>()
-    }
-
-    fn regions(&self, visit: &mut dyn FnMut(rt_core::Region)) {
-        self.walk_regions(visit);
     }
 
     fn build_stats(&self) -> BuildStats {
@@ -307,6 +270,18 @@ impl<P: Primitive> Accel for Grid<P> {
             ],
         }
     }
+
+    // The walks, each in its phase file: the ray walk (`traverse.rs`), the bundle walk
+    // (`bundle.rs`), closest points (`nearest.rs`), box overlap (`overlap.rs`), the drawing
+    // (`regions.rs`).
+    rt_core::accel_walks!(
+        build: build_from,
+        ray: query,
+        bundle: bundle_query,
+        ball: ball,
+        boxes: box_cells,
+        regions: walk_regions,
+    );
 }
 
 /// The README's example, compiled and run as a doctest so that it stays true.

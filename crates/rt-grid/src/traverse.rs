@@ -11,7 +11,7 @@ use crate::Grid;
 use crate::dda::{Dda, RayAxes};
 use rt_core::leaf::{self, Seen};
 use rt_core::trace::{self, Event, Place};
-use rt_core::{Mailbox, Primitive, Ray, RayQuery, SLAB_FAR_SCALE, Stats, Visited};
+use rt_core::{Primitive, Ray, RayQuery, SLAB_FAR_SCALE, Stats};
 use std::ops::ControlFlow;
 
 /// Mailbox slots per ray: the last this many primitives tested are not tested again.
@@ -36,28 +36,31 @@ impl<P: Primitive> Grid<P> {
         leaf::test_primitives(&self.prims, ids, ray, q, seen, dedupe, stats)
     }
 
-    /// The walk for query `q`: with a mailbox for a repeatable query, else remembering every
-    /// primitive tested ([`Seen`]).
+    /// The walk for query `q`, with the record of tested primitives its query needs
+    /// ([`leaf::walk_once`]: a mailbox of the last [`MAILBOX`], or every one).
     #[inline(always)]
     pub(crate) fn query<S: Stats, Q: RayQuery>(&self, ray: &Ray, q: &mut Q, stats: &mut S) {
-        if Q::REPEATABLE {
-            self.walk(ray, q, &mut Mailbox::<MAILBOX>::new(), stats);
-        } else {
-            Visited::with(self.prims.len(), |seen| self.walk(ray, q, seen, stats));
-        }
+        leaf::walk_once::<_, MAILBOX, Q, S>(self, ray, q, stats);
+    }
+}
+
+impl<P: Primitive> leaf::CellWalk for Grid<P> {
+    #[inline(always)]
+    fn prim_count(&self) -> usize {
+        self.prims.len()
     }
 
     /// The DDA walk.
     #[inline(always)]
-    fn walk<S: Stats, Q: RayQuery, M: Seen>(
+    fn walk<Q: RayQuery, S: Stats, M: Seen>(
         &self,
         ray: &Ray,
         q: &mut Q,
         seen: &mut M,
         stats: &mut S,
     ) {
-        // Outside the precondition (NaN, huge origins, ...): answer at once, walk nothing.
-        if self.refs.is_empty() || !ray.is_valid() {
+        // An empty structure walks nothing (`walk_once` has already turned away invalid rays).
+        if self.refs.is_empty() {
             return;
         }
         let shape = &self.shape;

@@ -9,12 +9,12 @@
 //! passes beside. One mailbox serves the whole bundle, over all levels.
 
 use crate::HGrid;
-use rt_core::bundle::{Bundle, LaneMailbox, Lanes, test_primitives};
 use rt_core::{Hit, Primitive, Ray, Stats};
 use rt_grid::bundle::{coherent, walk_slices};
+use rt_simd::bundle::{Bundle, LaneMailbox, Lanes, test_primitives};
 
 impl<P: Primitive> HGrid<P> {
-    /// The bundle queries, as the uniform grid's ([`walk_groups`](rt_core::bundle::walk_groups)):
+    /// The bundle queries, as the uniform grid's ([`walk_groups`](rt_simd::bundle::walk_groups)):
     /// each coherent bundle walked level by level, every other ray walked alone. Calls
     /// `answer(slot, hit)` for each of the first `slots` rays (for `ANY`, `Some` when the ray is
     /// blocked).
@@ -26,11 +26,11 @@ impl<P: Primitive> HGrid<P> {
         answer: impl FnMut(usize, Option<Hit>),
     ) {
         let top = &self.levels[0].shape;
-        rt_core::bundle::walk_groups::<S, ANY>(
+        rt_simd::bundle::walk_groups::<S, ANY>(
             rays,
             slots,
             stats,
-            |ray, stats| rt_core::bundle::single::<_, S, ANY>(self, ray, stats),
+            |ray, stats| rt_simd::bundle::single::<_, S, ANY>(self, ray, stats),
             |b| b.route(&top.bounds(), |b| !self.refs.is_empty() && coherent(top, b)),
             // Inlined, so that the walk is compiled with the vector instructions `walk_groups` runs
             // with (`Isa::run`).

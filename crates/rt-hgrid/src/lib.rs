@@ -47,11 +47,11 @@
 //! before the shell goes on.
 //!
 //! # Saving and loading
-//! [`Persist`](rt_core::persist::Persist) writes a built hierarchy to a versioned file and reads it
+//! [`Persist`] writes a built hierarchy to a versioned file and reads it
 //! back without rebuilding: every grid's box, resolution and cell range, the cells, the references
 //! and the primitives (the sections are listed in [`persist`]). Loading checks the file's framing
 //! and checksum, then runs [`HGrid::validate`], so a truncated, damaged or hostile file is refused
-//! with a typed [`LoadError`](rt_core::persist::LoadError) and a loaded hierarchy answers every
+//! with a typed [`LoadError`] and a loaded hierarchy answers every
 //! query bit for bit as the saved one.
 //!
 //! # Measurements
@@ -98,8 +98,10 @@ mod validate;
 pub use builder::MAX_LEVELS;
 pub use node::{Cell, Level};
 pub use rt_core::ValidationError;
+/// Saving and loading, re-exported so that a user of this crate alone can save and load.
+pub use rt_persist::{LoadError, Persist};
 
-use rt_core::{Accel, BuildStats, Hit, Primitive, Ray, RayQuery, Stats};
+use rt_core::{Accel, BuildStats, Primitive};
 
 /// Build and traversal parameters. `Default` is [`HGridParams::standard`].
 #[derive(Clone, Debug, PartialEq)]
@@ -197,14 +199,11 @@ impl<P: Primitive> Accel for HGrid<P> {
 
     /// Builds the grids; invalid primitives (see [`Primitive::is_valid`]) are left out.
     ///
+    /// Copies the primitives once, into the vector the leaves index, and builds over that.
+    ///
     /// # Panics
     /// If the grids would hold more than 2³² - 1 references or cells (far beyond what
     /// `max_cells` and memory allow for triangles).
-    fn build(prims: &[P], params: &HGridParams) -> Self {
-        Self::build_from(prims, params)
-    }
-
-    /// Copies the primitives once, into the vector the leaves index, and builds over that.
     fn build_from<G: rt_core::Geometry<Prim = P> + ?Sized>(
         geometry: &G,
         params: &HGridParams,
@@ -222,28 +221,6 @@ impl<P: Primitive> Accel for HGrid<P> {
         }
     }
 
-    #[inline]
-    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
-        self.query(ray, query, stats);
-    }
-
-    /// Coherent grid traversal, level by level (`bundle.rs`).
-    fn intersect_bundle_with<S: Stats>(
-        &self,
-        rays: &[Ray],
-        out: &mut [Option<Hit>],
-        stats: &mut S,
-    ) {
-        self.bundle_query::<S, false>(rays, out.len(), stats, |slot, hit| out[slot] = hit);
-    }
-
-    /// Coherent grid traversal, level by level (`bundle.rs`).
-    fn occluded_bundle_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
-        self.bundle_query::<S, true>(rays, out.len(), stats, |slot, hit| {
-            out[slot] = hit.is_some()
-        });
-    }
-
     fn bounds(&self) -> rt_core::Aabb {
         if self.valid_prims == 0 {
             rt_core::Aabb::EMPTY
@@ -252,26 +229,12 @@ impl<P: Primitive> Accel for HGrid<P> {
         }
     }
 
-    /// Shells of cells around the centre, nested grids searched in turn (`nearest.rs`).
-    fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
-        self.ball(query, stats);
-    }
-
-    /// The cells the query box covers, nested grids included (`overlap.rs`).
-    fn box_query<Q: rt_core::BoxQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
-        let _ = self.box_cells(query, stats);
-    }
-
     fn memory_bytes(&self) -> usize {
         size_of::<Self>()
             + self.levels.capacity() * size_of::<Level>()
             + self.cells.capacity() * size_of::<Cell>()
             + self.refs.capacity() * size_of::<u32>()
             + self.prims.capacity() * size_of::<P>()
-    }
-
-    fn regions(&self, visit: &mut dyn FnMut(rt_core::Region)) {
-        self.walk_regions(visit);
     }
 
     fn build_stats(&self) -> BuildStats {
@@ -286,6 +249,18 @@ impl<P: Primitive> Accel for HGrid<P> {
             extra: vec![("grids", self.levels.len() as f64)],
         }
     }
+
+    // The walks, each in its phase file: the ray walk (`traverse.rs`), the bundle walk
+    // (`bundle.rs`), closest points (`nearest.rs`), box overlap (`overlap.rs`), the drawing
+    // (`regions.rs`).
+    rt_core::accel_walks!(
+        build: build_from,
+        ray: query,
+        bundle: bundle_query,
+        ball: ball,
+        boxes: box_cells,
+        regions: walk_regions,
+    );
 }
 
 /// The README's example, compiled and run as a doctest so that it stays true.

@@ -1,6 +1,6 @@
 //! Saving and loading a built hierarchy ([`Persist`]).
 //!
-//! The sections, in the framing of [`rt_core::persist`] (layout version [`LAYOUT`]):
+//! The sections, in the framing of [`rt_persist`] (layout version [`LAYOUT`]):
 //!
 //! | tag | elements | what |
 //! | --- | --- | --- |
@@ -17,10 +17,8 @@
 use crate::{Cell, HGrid, Level};
 use rt_core::Aabb;
 use rt_core::glam::Vec3;
-use rt_core::persist::{
-    LoadError, Persist, Reader, SavedPrimitive, Writer, to_bool, to_u32, to_usize,
-};
 use rt_grid::persist::saved_shape;
+use rt_persist::{LoadError, Persist, Reader, SavedPrimitive, Writer, to_bool, to_u32, to_usize};
 
 /// The version of the sections this module writes.
 pub const LAYOUT: u32 = 1;

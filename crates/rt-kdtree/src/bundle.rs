@@ -32,8 +32,8 @@
 //! few cells.
 
 use crate::{KdTree, MAX_DEPTH};
-use rt_core::bundle::{Bundle, LaneMailbox, Lanes, narrow, test_primitives};
 use rt_core::{Aabb, Hit, Primitive, Ray, Stats};
+use rt_simd::bundle::{Bundle, LaneMailbox, Lanes, narrow, test_primitives};
 
 /// The most the lanes' directions may spread ([`Bundle::direction_spread`], about radians) for
 /// the bundle to walk together.
@@ -46,7 +46,7 @@ use rt_core::{Aabb, Hit, Primitive, Ray, Stats};
 pub const MAX_SPREAD: f32 = 1.0;
 
 impl<P: Primitive> KdTree<P> {
-    /// The bundle queries ([`walk_groups`](rt_core::bundle::walk_groups)): each bundle whose
+    /// The bundle queries ([`walk_groups`](rt_simd::bundle::walk_groups)): each bundle whose
     /// directions stay within [`MAX_SPREAD`] walked as a packet, every other ray walked alone by
     /// the tree's own single-ray traversal.
     pub(crate) fn bundle_query<S: Stats, const ANY: bool>(
@@ -56,11 +56,11 @@ impl<P: Primitive> KdTree<P> {
         stats: &mut S,
         answer: impl FnMut(usize, Option<Hit>),
     ) {
-        rt_core::bundle::walk_groups::<S, ANY>(
+        rt_simd::bundle::walk_groups::<S, ANY>(
             rays,
             slots,
             stats,
-            |ray, stats| rt_core::bundle::single::<_, S, ANY>(self, ray, stats),
+            |ray, stats| rt_simd::bundle::single::<_, S, ANY>(self, ray, stats),
             |b| {
                 b.route(&self.bounds, |b| {
                     !self.refs.is_empty() && b.direction_spread() <= MAX_SPREAD

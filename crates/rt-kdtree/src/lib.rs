@@ -102,11 +102,11 @@
 //! references, visits and tests per ray, build time, speed) on the bunny.
 //!
 //! # Saving and loading
-//! [`Persist`](rt_core::persist::Persist) writes a built tree to a versioned file and reads it back
+//! [`Persist`] writes a built tree to a versioned file and reads it back
 //! without rebuilding: the nodes, the references, the primitives and the root cell (the sections
 //! are listed in [`persist`]). Loading checks the file's framing and checksum, then runs
 //! [`KdTree::validate`], so a truncated, damaged or hostile file is refused with a typed
-//! [`LoadError`](rt_core::persist::LoadError) and a loaded tree answers every query bit for bit as
+//! [`LoadError`] and a loaded tree answers every query bit for bit as
 //! the saved one.
 //!
 //! # Measurements
@@ -148,8 +148,10 @@ mod validate;
 pub use bundle::MAX_SPREAD;
 pub use node::Node;
 pub use rt_core::ValidationError;
+/// Saving and loading, re-exported so that a user of this crate alone can save and load.
+pub use rt_persist::{LoadError, Persist};
 
-use rt_core::{Aabb, Accel, BuildStats, Hit, Primitive, Ray, RayQuery, Stats};
+use rt_core::{Aabb, Accel, BuildStats, Primitive, Ray, RayQuery, Stats};
 
 /// The deepest a tree may be (the size of the fixed traversal stack); `max_depth` is clamped to it.
 pub const MAX_DEPTH: usize = 64;
@@ -310,25 +312,28 @@ impl<P: Primitive> KdTree<P> {
         self.traversal
     }
 
-    /// One ray by the tree's traversal, for query `q`: with a mailbox for a repeatable query,
-    /// else remembering every primitive tested ([`rt_core::leaf::Seen`]).
+    /// One ray by the tree's traversal, for query `q`, with the record of tested primitives
+    /// its query needs ([`rt_core::leaf::walk_once`]: a mailbox of the last few, or every one).
     #[inline(always)]
     fn single<S: Stats, Q: RayQuery>(&self, ray: &Ray, q: &mut Q, stats: &mut S) {
-        // Outside the precondition (NaN, huge origins, ...): answer at once, walk nothing.
-        if !ray.is_valid() {
-            return;
-        }
-        if Q::REPEATABLE {
-            let mut mailbox = rt_core::Mailbox::<{ traverse::MAILBOX }>::new();
-            self.walk(ray, q, &mut mailbox, stats);
-        } else {
-            rt_core::Visited::with(self.prims.len(), |seen| self.walk(ray, q, seen, stats));
-        }
+        rt_core::leaf::walk_once::<_, { traverse::MAILBOX }, Q, S>(self, ray, q, stats);
+    }
+
+    /// Switches the traversal; the tree is the same for both.
+    pub fn set_traversal(&mut self, traversal: Traversal) {
+        self.traversal = traversal;
+    }
+}
+
+impl<P: Primitive> rt_core::leaf::CellWalk for KdTree<P> {
+    #[inline(always)]
+    fn prim_count(&self) -> usize {
+        self.prims.len()
     }
 
     /// The tree's traversal.
     #[inline(always)]
-    fn walk<S: Stats, Q: RayQuery, M: rt_core::leaf::Seen>(
+    fn walk<Q: RayQuery, S: Stats, M: rt_core::leaf::Seen>(
         &self,
         ray: &Ray,
         q: &mut Q,
@@ -339,11 +344,6 @@ impl<P: Primitive> KdTree<P> {
             Traversal::Stack => self.traverse_stack(ray, q, seen, stats),
             Traversal::Restart => self.traverse_restart(ray, q, seen, stats),
         }
-    }
-
-    /// Switches the traversal; the tree is the same for both.
-    pub fn set_traversal(&mut self, traversal: Traversal) {
-        self.traversal = traversal;
     }
 }
 
@@ -364,14 +364,11 @@ impl<P: Primitive> Accel for KdTree<P> {
 
     /// Builds the tree; invalid primitives (see [`Primitive::is_valid`]) are left out.
     ///
+    /// Copies the primitives once, into the vector the leaves index, and builds over that.
+    ///
     /// # Panics
     /// If the tree would need more than 2³⁰ nodes or references, the most an 8-byte node can
     /// index (far beyond what fits in memory for triangles).
-    fn build(prims: &[P], params: &KdParams) -> Self {
-        Self::build_from(prims, params)
-    }
-
-    /// Copies the primitives once, into the vector the leaves index, and builds over that.
     fn build_from<G: rt_core::Geometry<Prim = P> + ?Sized>(
         geometry: &G,
         params: &KdParams,
@@ -391,41 +388,8 @@ impl<P: Primitive> Accel for KdTree<P> {
         }
     }
 
-    #[inline]
-    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
-        self.single(ray, query, stats);
-    }
-
-    /// Packet traversal in the bundle's direction octant (`bundle.rs`).
-    fn intersect_bundle_with<S: Stats>(
-        &self,
-        rays: &[Ray],
-        out: &mut [Option<Hit>],
-        stats: &mut S,
-    ) {
-        self.bundle_query::<S, false>(rays, out.len(), stats, |slot, hit| out[slot] = hit);
-    }
-
-    /// Packet traversal in the bundle's direction octant (`bundle.rs`); a lane leaves at its
-    /// first hit.
-    fn occluded_bundle_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
-        self.bundle_query::<S, true>(rays, out.len(), stats, |slot, hit| {
-            out[slot] = hit.is_some()
-        });
-    }
-
     fn bounds(&self) -> Aabb {
         self.bounds
-    }
-
-    /// Near side first, the far side while the ball reaches it (`nearest.rs`).
-    fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
-        self.ball(query, stats);
-    }
-
-    /// Each half the query box reaches (`overlap.rs`).
-    fn box_query<Q: rt_core::BoxQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
-        let _ = self.box_cells(query, stats);
     }
 
     fn memory_bytes(&self) -> usize {
@@ -433,10 +397,6 @@ impl<P: Primitive> Accel for KdTree<P> {
             + self.nodes.capacity() * size_of::<Node>()
             + self.refs.capacity() * size_of::<u32>()
             + self.prims.capacity() * size_of::<P>()
-    }
-
-    fn regions(&self, visit: &mut dyn FnMut(rt_core::Region)) {
-        self.walk_regions(visit);
     }
 
     fn build_stats(&self) -> BuildStats {
@@ -450,6 +410,18 @@ impl<P: Primitive> Accel for KdTree<P> {
             extra: Vec::new(),
         }
     }
+
+    // The walks, each in its phase file: the ray walk (`traverse.rs`), the bundle walk
+    // (`bundle.rs`), closest points (`nearest.rs`), box overlap (`overlap.rs`), the drawing
+    // (`regions.rs`).
+    rt_core::accel_walks!(
+        build: build_from,
+        ray: single,
+        bundle: bundle_query,
+        ball: ball,
+        boxes: box_cells,
+        regions: walk_regions,
+    );
 }
 
 /// The README's example, compiled and run as a doctest so that it stays true.

@@ -24,8 +24,8 @@
 use crate::Octree;
 use crate::builder::MAX_DEPTH;
 use crate::node::{Node, child_box, midpoint};
-use rt_core::bundle::{Bundle, LaneMailbox, Lanes, narrow, test_primitives};
 use rt_core::{Aabb, Hit, Primitive, Ray, Stats};
+use rt_simd::bundle::{Bundle, LaneMailbox, Lanes, narrow, test_primitives};
 
 /// The most the lanes' slopes across their major axis may spread, summed over the two other
 /// axes (about radians) for the bundle to walk together.
@@ -41,7 +41,7 @@ pub const MAX_SPREAD: f32 = 1.0;
 const STACK: usize = 8 * (MAX_DEPTH as usize + 1);
 
 impl<P: Primitive> Octree<P> {
-    /// The bundle queries ([`walk_groups`](rt_core::bundle::walk_groups)): each bundle whose
+    /// The bundle queries ([`walk_groups`](rt_simd::bundle::walk_groups)): each bundle whose
     /// directions stay within [`MAX_SPREAD`] walked as a packet, every other ray walked alone.
     pub(crate) fn bundle_query<S: Stats, const ANY: bool>(
         &self,
@@ -50,11 +50,11 @@ impl<P: Primitive> Octree<P> {
         stats: &mut S,
         answer: impl FnMut(usize, Option<Hit>),
     ) {
-        rt_core::bundle::walk_groups::<S, ANY>(
+        rt_simd::bundle::walk_groups::<S, ANY>(
             rays,
             slots,
             stats,
-            |ray, stats| rt_core::bundle::single::<_, S, ANY>(self, ray, stats),
+            |ray, stats| rt_simd::bundle::single::<_, S, ANY>(self, ray, stats),
             |b| b.route(&self.bounds, |b| !self.refs.is_empty() && coherent(b)),
             // Inlined, so that the walk is compiled with the vector instructions `walk_groups` runs
             // with (`Isa::run`).

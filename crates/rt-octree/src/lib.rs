@@ -78,7 +78,7 @@
 //! all of them. Each stack entry carries the lanes that entered its parent; the first of them
 //! is tested against the node's box with its own slab test and, when it fails (and at leaves),
 //! all of them, eight per vector step, so lanes that have hit drop out; one interval test
-//! ([`Bundle::may_enter`](rt_core::Bundle::may_enter)) culls a box for the whole bundle. A
+//! ([`Bundle::may_enter`](rt_simd::Bundle::may_enter)) culls a box for the whole bundle. A
 //! leaf's primitives are tested against its lanes with the single ray's watertight arithmetic,
 //! eight lanes per vector step (`bundle.rs`). Bundles whose directions spread go singly. Each
 //! ray answers exactly as its single-ray query.
@@ -89,11 +89,11 @@
 //! distance so far (`nearest.rs`).
 //!
 //! # Saving and loading
-//! [`Persist`](rt_core::persist::Persist) writes a built tree to a versioned file and reads it back
+//! [`Persist`] writes a built tree to a versioned file and reads it back
 //! without rebuilding: the root, the blocks of children, the references, the primitives and the
 //! root cube (the sections are listed in [`persist`]). Loading checks the file's framing and
 //! checksum, then runs [`Octree::validate`], so a truncated, damaged or hostile file is refused
-//! with a typed [`LoadError`](rt_core::persist::LoadError) and a loaded tree answers every query
+//! with a typed [`LoadError`] and a loaded tree answers every query
 //! bit for bit as the saved one.
 //!
 //! # Measurements
@@ -135,8 +135,10 @@ mod validate;
 pub use builder::MAX_DEPTH;
 pub use node::{Block, Node};
 pub use rt_core::ValidationError;
+/// Saving and loading, re-exported so that a user of this crate alone can save and load.
+pub use rt_persist::{LoadError, Persist};
 
-use rt_core::{Aabb, Accel, BuildStats, Hit, Primitive, Ray, RayQuery, Stats};
+use rt_core::{Aabb, Accel, BuildStats, Primitive};
 
 /// Build and traversal parameters. `Default` is [`OctreeParams::standard`].
 #[derive(Clone, Debug, PartialEq)]
@@ -253,14 +255,11 @@ impl<P: Primitive> Accel for Octree<P> {
 
     /// Builds the octree; invalid primitives (see [`Primitive::is_valid`]) are left out.
     ///
+    /// Copies the primitives once, into the vector the leaves index, and builds over that.
+    ///
     /// # Panics
     /// If the octree would hold more than 2³² - 1 references or blocks (far beyond what memory
     /// allows for triangles, since a split that would multiply references is refused).
-    fn build(prims: &[P], params: &OctreeParams) -> Self {
-        Self::build_from(prims, params)
-    }
-
-    /// Copies the primitives once, into the vector the leaves index, and builds over that.
     fn build_from<G: rt_core::Geometry<Prim = P> + ?Sized>(
         geometry: &G,
         params: &OctreeParams,
@@ -279,28 +278,6 @@ impl<P: Primitive> Accel for Octree<P> {
         }
     }
 
-    #[inline]
-    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
-        self.query(ray, query, stats);
-    }
-
-    /// A packet walk in the bundle's direction octant (`bundle.rs`).
-    fn intersect_bundle_with<S: Stats>(
-        &self,
-        rays: &[Ray],
-        out: &mut [Option<Hit>],
-        stats: &mut S,
-    ) {
-        self.bundle_query::<S, false>(rays, out.len(), stats, |slot, hit| out[slot] = hit);
-    }
-
-    /// The packet walk (`bundle.rs`); a lane leaves at its first hit.
-    fn occluded_bundle_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
-        self.bundle_query::<S, true>(rays, out.len(), stats, |slot, hit| {
-            out[slot] = hit.is_some()
-        });
-    }
-
     /// The root cube (a cube around the scene box, see [`Octree::bounds`]).
     fn bounds(&self) -> Aabb {
         if self.valid_prims == 0 {
@@ -310,25 +287,11 @@ impl<P: Primitive> Accel for Octree<P> {
         }
     }
 
-    /// Nearest child first, pruned by the query's radius (`nearest.rs`).
-    fn ball_query<Q: rt_core::BallQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
-        self.ball(query, stats);
-    }
-
-    /// Every octant the query box meets (`overlap.rs`).
-    fn box_query<Q: rt_core::BoxQuery<P>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
-        let _ = self.box_cells(query, stats);
-    }
-
     fn memory_bytes(&self) -> usize {
         size_of::<Self>()
             + self.blocks.capacity() * size_of::<Block>()
             + self.refs.capacity() * size_of::<u32>()
             + self.prims.capacity() * size_of::<P>()
-    }
-
-    fn regions(&self, visit: &mut dyn FnMut(rt_core::Region)) {
-        self.walk_regions(visit);
     }
 
     fn build_stats(&self) -> BuildStats {
@@ -351,6 +314,18 @@ impl<P: Primitive> Accel for Octree<P> {
             extra: vec![],
         }
     }
+
+    // The walks, each in its phase file: the ray walk (`traverse.rs`), the bundle walk
+    // (`bundle.rs`), closest points (`nearest.rs`), box overlap (`overlap.rs`), the drawing
+    // (`regions.rs`).
+    rt_core::accel_walks!(
+        build: build_from,
+        ray: query,
+        bundle: bundle_query,
+        ball: ball,
+        boxes: box_cells,
+        regions: walk_regions,
+    );
 }
 
 /// The README's example, compiled and run as a doctest so that it stays true.

@@ -1,6 +1,6 @@
 //! Saving and loading a built tree ([`Persist`]).
 //!
-//! The sections, in the framing of [`rt_core::persist`] (layout version [`LAYOUT`]):
+//! The sections, in the framing of [`rt_persist`] (layout version [`LAYOUT`]):
 //!
 //! | tag | elements | what |
 //! | --- | --- | --- |
@@ -16,9 +16,7 @@
 
 use crate::{Block, Node, Octree};
 use rt_core::Aabb;
-use rt_core::persist::{
-    LoadError, Persist, Reader, SavedPrimitive, Writer, to_bool, to_u32, to_usize,
-};
+use rt_persist::{LoadError, Persist, Reader, SavedPrimitive, Writer, to_bool, to_u32, to_usize};
 
 /// The version of the sections this module writes.
 pub const LAYOUT: u32 = 1;

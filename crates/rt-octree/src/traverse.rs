@@ -42,9 +42,7 @@ use crate::node::{Block, Node};
 use rt_core::glam::{BVec3A, Vec3A};
 use rt_core::leaf::{self, Seen};
 use rt_core::trace::{self, Event, Place};
-use rt_core::{
-    Aabb, Mailbox, NEAR_TIE, Primitive, Ray, RayQuery, SLAB_FAR_SCALE, Stack, Stats, Visited,
-};
+use rt_core::{Aabb, NEAR_TIE, Primitive, Ray, RayQuery, SLAB_FAR_SCALE, Stack, Stats};
 
 /// Mailbox slots per ray: the last this many primitives tested are not tested again.
 pub(crate) const MAILBOX: usize = 8;
@@ -278,28 +276,31 @@ fn report_children<S: Stats>(
 }
 
 impl<P: Primitive> Octree<P> {
-    /// The walk for query `q`: with a mailbox for a repeatable query, else remembering every
-    /// primitive tested ([`Seen`]).
+    /// The walk for query `q`, with the record of tested primitives its query needs
+    /// ([`leaf::walk_once`]: a mailbox of the last [`MAILBOX`], or every one).
     #[inline(always)]
     pub(crate) fn query<S: Stats, Q: RayQuery>(&self, ray: &Ray, q: &mut Q, stats: &mut S) {
-        if Q::REPEATABLE {
-            self.walk(ray, q, &mut Mailbox::<MAILBOX>::new(), stats);
-        } else {
-            Visited::with(self.prims.len(), |seen| self.walk(ray, q, seen, stats));
-        }
+        leaf::walk_once::<_, MAILBOX, Q, S>(self, ray, q, stats);
+    }
+}
+
+impl<P: Primitive> leaf::CellWalk for Octree<P> {
+    #[inline(always)]
+    fn prim_count(&self) -> usize {
+        self.prims.len()
     }
 
     /// The walk.
     #[inline(always)]
-    fn walk<S: Stats, Q: RayQuery, M: Seen>(
+    fn walk<Q: RayQuery, S: Stats, M: Seen>(
         &self,
         ray: &Ray,
         q: &mut Q,
         seen: &mut M,
         stats: &mut S,
     ) {
-        // Outside the precondition (NaN, huge origins, ...): answer at once, walk nothing.
-        if self.refs.is_empty() || !ray.is_valid() {
+        // An empty structure walks nothing (`walk_once` has already turned away invalid rays).
+        if self.refs.is_empty() {
             return;
         }
         let r = RayAxes::new(ray);

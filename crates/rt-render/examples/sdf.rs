@@ -13,15 +13,16 @@
 //! the spacing.
 //!
 //! Each sample is the BVH's closest-point distance, signed by the fast winding number
-//! ([`rt_core::WindingTree`]), so meshes with holes get a sensible inside. The slice is the plane
+//! ([`rt_sdf::WindingTree`]), so meshes with holes get a sensible inside. The slice is the plane
 //! through the box's centre facing `z` (for the bunny, the view from the front), drawn at 512
 //! pixels across: blue inside, orange outside, darker bands every 2% of the box's diagonal and
 //! the surface itself in black.
 
 use rayon::prelude::*;
 use rt_bvh::Bvh;
-use rt_core::{Accel, WindingTree, glam::Vec3};
+use rt_core::{Accel, glam::Vec3};
 use rt_render::Image;
+use rt_sdf::{SignedDistance, WindingTree};
 use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;

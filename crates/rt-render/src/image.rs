@@ -201,7 +201,7 @@ pub fn render(
 }
 
 /// Side of the square blocks of pixels whose primary rays [`render`] traces as one bundle
-/// (64 rays, a full bundle of [`rt_core::BUNDLE_LANES`]).
+/// (64 rays, a full bundle of `rt_simd::BUNDLE_LANES`).
 const BLOCK: u32 = 8;
 
 /// Fills a `width × height` image by calling `pixel(x, y)` for every pixel, tiles in parallel.

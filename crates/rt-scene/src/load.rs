@@ -51,8 +51,8 @@ impl SceneFormat {
 /// Never panics.
 ///
 /// ```
-/// let err = rt_scene::load_mesh("no/such/model.ply").unwrap_err();
-/// assert!(err.to_string().starts_with("no/such/model.ply: cannot read file"));
+/// let err = rt_scene::load_mesh("no/such/model.obj").unwrap_err();
+/// assert!(err.to_string().starts_with("no/such/model.obj: cannot read file"));
 /// let err = rt_scene::load_mesh("model.stl").unwrap_err();
 /// assert_eq!(err.kind, rt_scene::LoadErrorKind::UnknownFormat);
 /// ```

@@ -19,12 +19,12 @@
 use rt_bvh::{Bvh, BvhParams};
 use rt_conformance::{compare_bundles, compare_rays};
 use rt_core::glam::Vec3;
-use rt_core::persist::Persist;
 use rt_core::{Accel, BruteForce, Ray, Triangle};
 use rt_grid::{Grid, GridParams};
 use rt_hgrid::{HGrid, HGridParams};
 use rt_kdtree::{KdParams, KdTree};
 use rt_octree::{Octree, OctreeParams};
+use rt_persist::Persist;
 use rt_scene::{SceneFormat, load_mesh_bytes};
 
 /// Loads `bytes` as `format`.
@@ -295,7 +295,7 @@ fn saved_as<A: Accel<Prim = Triangle> + Persist>(bytes: &[u8]) -> Result<(), Str
     let _ = A::load(bytes);
     let mut file = bytes.to_vec();
     if file.len() >= 96 {
-        let sum = rt_core::persist::file_checksum(&file);
+        let sum = rt_persist::file_checksum(&file);
         file[88..96].copy_from_slice(&sum.to_le_bytes());
     }
     let Ok(accel) = A::load(&file) else {

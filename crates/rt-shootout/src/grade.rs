@@ -13,9 +13,9 @@
 //! the next check in a new process.
 
 use crate::compare::Args;
-use crate::structures::{self, Builder, Entry, Query};
+use crate::structures::{self, Builder, Entry};
 use rt_core::DynAccel;
-use rt_core::{Accel, BuildStats, Hit, Region, Stats, Triangle};
+use rt_core::{Accel, BuildStats, PrimHit, RayQuery, Region, Stats, Triangle};
 use std::path::PathBuf;
 use std::sync::Arc;
 
@@ -47,25 +47,37 @@ impl std::fmt::Debug for Row {
     }
 }
 
-/// Asks the row, traced when the sink traces (so the kit's checks of the trace see the row's
-/// events), and replays what it reported into `stats`.
-fn ask<S: Stats>(
+/// Runs `query` through the row's own ray walk and replays what it reported into `stats`.
+/// Traced (the kit traces closest and any hits), the row answers that query with every step
+/// recorded, the steps are replayed into `stats`, and the answer is offered to `query`.
+fn ask<Q: RayQuery, S: Stats>(
     row: &dyn DynAccel<Triangle>,
     ray: &rt_core::Ray,
-    query: Query,
+    query: &mut Q,
     stats: &mut S,
-) -> Option<Hit> {
+) {
     if S::TRACE {
-        let (hit, trace) = row.trace_dyn(ray, query == Query::Any);
+        let (hit, trace) = row.trace_dyn(ray, Q::OCCLUSION);
         replay(trace.counters, stats);
         for e in trace.events {
             stats.event(e);
         }
-        hit
+        if let Some(h) = hit {
+            let hit = if Q::OCCLUSION {
+                rt_core::query::BLOCKS
+            } else {
+                PrimHit {
+                    t: h.t,
+                    u: h.u,
+                    v: h.v,
+                }
+            };
+            let _ = query.offer(h.prim, hit);
+        }
     } else {
-        let (hit, c) = structures::answer_counted(row, ray, query);
+        let mut c = rt_core::Counters::default();
+        row.ray_query_dyn(ray, query, Some(&mut c));
         replay(c, stats);
-        hit
     }
 }
 
@@ -95,11 +107,9 @@ impl Accel for Row {
             .unwrap_or_else(|| structures::brute_force().build);
         Row(build(prims))
     }
-    fn intersect_with<S: Stats>(&self, ray: &rt_core::Ray, stats: &mut S) -> Option<Hit> {
-        ask(self.0.as_ref(), ray, Query::Closest, stats)
-    }
-    fn occluded_with<S: Stats>(&self, ray: &rt_core::Ray, stats: &mut S) -> bool {
-        ask(self.0.as_ref(), ray, Query::Any, stats).is_some()
+    /// The row's own ray walk, its counts replayed into `stats` when it returns.
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &rt_core::Ray, query: &mut Q, stats: &mut S) {
+        ask(self.0.as_ref(), ray, query, stats);
     }
     fn bounds(&self) -> rt_core::Aabb {
         self.0.bounds_dyn()

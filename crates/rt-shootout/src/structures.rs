@@ -11,14 +11,16 @@ use rayon::prelude::*;
 use rt_bvh::Bvh;
 use rt_core::glam::Vec3;
 use rt_core::{
-    Aabb, Accel, BallQuery, BruteForce, BuildStats, Counters, DynAccel, Hit, Instance, NoStats,
-    OverlapQuery, PointHit, PrimHit, Ray, Refit, RefitError, Region, Shape, SignedPoint, Stats,
-    Trace, Triangle, TwoLevel, WindingTree, winding_number_exact,
+    Aabb, Accel, BallQuery, BuildStats, Counters, DynAccel, Hit, NoStats, OverlapQuery, PointHit,
+    PrimHit, Ray, Refit, RefitError, Region, Shape, Stats, Trace, Triangle,
 };
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
+use rt_instance::{Instance, TwoLevel};
 use rt_kdtree::KdTree;
 use rt_octree::Octree;
+use rt_sdf::{SignedPoint, WindingTree, winding_number_exact};
+use rt_simd::BundledBruteForce;
 use std::sync::Arc;
 
 /// Which query a run makes.
@@ -191,7 +193,7 @@ pub fn signed_counted(
     points: &[(Vec3, f32)],
 ) -> (Vec<Option<SignedPoint>>, Counters) {
     counted_chunks(points, |points, out, c| {
-        s.signed_distances_all(sign, points, out, Some(c))
+        rt_sdf::signed_distances(s, sign, points, out, Some(c))
     })
 }
 
@@ -206,7 +208,7 @@ pub fn signed_timed(
         .map(|points| {
             let mut out = [None; CHUNK];
             let out = &mut out[..points.len()];
-            s.signed_distances_all(sign, points, out, None);
+            rt_sdf::signed_distances(s, sign, points, out, None);
             out.iter().flatten().filter(|h| h.inside).count()
         })
         .sum()
@@ -460,9 +462,11 @@ pub fn all() -> Vec<Entry> {
     all
 }
 
-/// The brute-force reference.
+/// The brute-force reference, whose bundle queries test every triangle against a bundle's
+/// lanes at once (rt-simd's [`BundledBruteForce`]): the answers of the rays `compare` checks
+/// come from them, each the single-ray answer bit for bit.
 pub fn brute_force() -> Entry {
-    entries_of::<BruteForce<Triangle>, BruteForce<Shape>>().remove(0)
+    entries_of::<BundledBruteForce<Triangle>, BundledBruteForce<Shape>>().remove(0)
 }
 
 /// The entry called `name` among `entries`, or `brute-force`; else an error listing the names.
@@ -538,7 +542,7 @@ impl<T: TwoLevel<Triangle>> Field<T> {
         })
     }
 
-    fn flat(&self, h: rt_core::InstanceHit) -> Hit {
+    fn flat(&self, h: rt_instance::InstanceHit) -> Hit {
         Hit {
             prim: h.instance * self.mesh.len() as u32 + h.prim,
             ..h.hit()

@@ -3,7 +3,7 @@
 //! and on the others), instances, both views, bundles and closest points.
 
 use rt_bvh::{Bvh, BvhParams};
-use rt_core::{Aabb, Accel, BuildStats, Hit, Ray, Stats, Triangle};
+use rt_core::{Aabb, Accel, BuildStats, Hit, PrimHit, Ray, RayQuery, Stats, Triangle};
 use rt_shootout::compare::to_table;
 use rt_shootout::{Args, Entry, Report, Shootout, args_from, entries_of_triangles};
 
@@ -21,13 +21,9 @@ impl<P: rt_core::Primitive> Accel for LosesEvenHits<P> {
     fn build(prims: &[P], _: &()) -> Self {
         Self(Bvh::build(prims, &BvhParams::sah()))
     }
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        self.0
-            .intersect_with(ray, stats)
-            .filter(|h| h.prim % 2 == 1)
-    }
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.intersect_with(ray, stats).is_some()
+    /// Offers the query the odd primitives' hits only.
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        self.0.ray_query(ray, &mut OddHits(query), stats);
     }
     fn bounds(&self) -> Aabb {
         self.0.bounds()
@@ -41,6 +37,24 @@ impl<P: rt_core::Primitive> Accel for LosesEvenHits<P> {
     }
     fn build_stats(&self) -> BuildStats {
         self.0.build_stats()
+    }
+}
+
+/// Passes on only the hits on odd primitives offered to it.
+struct OddHits<'a, Q>(&'a mut Q);
+
+impl<Q: RayQuery> RayQuery for OddHits<'_, Q> {
+    const OCCLUSION: bool = Q::OCCLUSION;
+    const REPEATABLE: bool = Q::REPEATABLE;
+    fn t_far(&self) -> f32 {
+        self.0.t_far()
+    }
+    fn offer(&mut self, prim: u32, hit: PrimHit) -> std::ops::ControlFlow<()> {
+        if prim % 2 == 1 {
+            self.0.offer(prim, hit)
+        } else {
+            std::ops::ControlFlow::Continue(())
+        }
     }
 }
 
@@ -227,11 +241,8 @@ impl<P: rt_core::Primitive, const BROKEN: bool> Accel for WrappedBvh<P, BROKEN> 
     fn build(prims: &[P], _: &()) -> Self {
         Self(Bvh::build(prims, &BvhParams::wide()))
     }
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        self.0.intersect_with(ray, stats)
-    }
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.0.occluded_with(ray, stats)
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        self.0.ray_query(ray, query, stats);
     }
     fn intersect_bundle_with<S: Stats>(
         &self,

@@ -7,12 +7,12 @@
 use rt_bvh::Bvh;
 use rt_conformance::{SCENES, lattice_rays, lattice_triangles, scene};
 use rt_core::glam::Vec3;
-use rt_core::persist::Persist;
 use rt_core::{Accel, Mesh, Ray, Triangle};
 use rt_grid::Grid;
 use rt_hgrid::HGrid;
 use rt_kdtree::KdTree;
 use rt_octree::Octree;
+use rt_persist::Persist;
 use rt_scene::SceneFormat;
 use rt_scene::save::{PlyEncoding, glb_bytes, gltf_embedded, ply_bytes};
 use rt_shootout::fuzz;

@@ -12,9 +12,12 @@ mod groups;
 
 use groups::{GROUP, Groups};
 use rt_conformance::Part;
-use rt_core::{Aabb, Accel, BallQuery, BruteForce, BuildStats, Hit, Ray, Stats, Triangle};
+use rt_core::{
+    Aabb, Accel, BallQuery, BruteForce, BuildStats, PrimHit, Ray, RayQuery, Stats, Triangle,
+};
 use rt_shootout::Shootout;
 use serde_json::Value;
+use std::ops::ControlFlow;
 use std::process::ExitCode;
 
 /// Everything but the build and the query a row below breaks, answered by brute force.
@@ -49,13 +52,13 @@ impl Accel for TodoAny {
         Self(BruteForce::build(prims, &()))
     }
     const NAME: &'static str = "todo-any";
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        self.0.intersect_with(ray, stats)
-    }
     // The stub a lab's template has: the lint against `todo!()` is for code that ships.
     #[allow(clippy::todo)]
-    fn occluded_with<S: Stats>(&self, _: &Ray, _: &mut S) -> bool {
-        todo!("step 5: the any hit")
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        if Q::OCCLUSION {
+            todo!("step 5: the any hit")
+        }
+        self.0.ray_query(ray, query, stats);
     }
 }
 
@@ -68,14 +71,11 @@ impl Accel for Loops {
         Self(BruteForce::build(prims, &()))
     }
     const NAME: &'static str = "loops";
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        while ray.is_valid() && ray.dir().y < -0.5 * ray.dir().length() {
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        while !Q::OCCLUSION && ray.is_valid() && ray.dir().y < -0.5 * ray.dir().length() {
             std::hint::spin_loop();
         }
-        self.0.intersect_with(ray, stats)
-    }
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.0.occluded_with(ray, stats)
+        self.0.ray_query(ray, query, stats);
     }
 }
 
@@ -100,11 +100,8 @@ impl Accel for Overflows {
         }
         Self(BruteForce::build(prims, &()))
     }
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        self.0.intersect_with(ray, stats)
-    }
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.0.occluded_with(ray, stats)
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        self.0.ray_query(ray, query, stats);
     }
 }
 
@@ -117,15 +114,12 @@ impl Accel for Panics {
         Self(BruteForce::build(prims, &()))
     }
     const NAME: &'static str = "panics";
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        let far = [ray.origin.x > 3.0];
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        let far = [!Q::OCCLUSION && ray.origin.x > 3.0];
         if std::hint::black_box(far)[usize::from(far[0])] {
             unreachable!("the index above is out of bounds");
         }
-        self.0.intersect_with(ray, stats)
-    }
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.0.occluded_with(ray, stats)
+        self.0.ray_query(ray, query, stats);
     }
 }
 
@@ -142,18 +136,12 @@ impl Accel for DropsLast {
     fn build(prims: &[Triangle], _: &()) -> Self {
         Self(Groups::build(prims, &()))
     }
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        let tris = &self.0.tris;
-        let last_of_group = |h: &Hit| {
-            let pos = tris.iter().position(|(id, _)| *id == h.prim).unwrap_or(0);
-            pos % GROUP == GROUP - 1 || pos + 1 == tris.len()
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        let mut skip = SkipsLast {
+            inner: query,
+            tris: &self.0.tris,
         };
-        self.0
-            .intersect_with(ray, stats)
-            .filter(|h| !last_of_group(h))
-    }
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.intersect_with(ray, stats).is_some()
+        self.0.ray_query(ray, &mut skip, stats);
     }
     fn bounds(&self) -> Aabb {
         self.0.bounds()
@@ -166,6 +154,32 @@ impl Accel for DropsLast {
     }
     fn build_stats(&self) -> BuildStats {
         self.0.build_stats()
+    }
+}
+
+/// A query offered every hit but those on the last triangle of a group.
+struct SkipsLast<'a, Q> {
+    inner: &'a mut Q,
+    tris: &'a [(u32, Triangle)],
+}
+
+impl<Q: RayQuery> RayQuery for SkipsLast<'_, Q> {
+    const OCCLUSION: bool = Q::OCCLUSION;
+    const REPEATABLE: bool = Q::REPEATABLE;
+    fn t_far(&self) -> f32 {
+        self.inner.t_far()
+    }
+    fn offer(&mut self, prim: u32, hit: PrimHit) -> ControlFlow<()> {
+        let pos = self
+            .tris
+            .iter()
+            .position(|(id, _)| *id == prim)
+            .unwrap_or(0);
+        if pos % GROUP == GROUP - 1 || pos + 1 == self.tris.len() {
+            ControlFlow::Continue(())
+        } else {
+            self.inner.offer(prim, hit)
+        }
     }
 }
 

@@ -11,8 +11,9 @@
 //!    enters a box.
 //! 2. [`step2`]: the build with a median split, written depth first into one array of nodes.
 //! 3. [`step3`]: one traversal step: which children of a node the ray enters, nearest first.
-//! 4. [`step4`]: the closest hit: a stack, nearest child first, and nothing beyond the best hit.
-//! 5. [`step5`]: the any-hit query (shadow rays): stop at the first hit.
+//! 4. [`step4`]: the walk for a query (the closest hit is one): a stack, nearest child first,
+//!    and nothing beyond the query's far end.
+//! 5. [`step5`]: the any-hit walk (shadow rays): stop at the first hit.
 //! 6. [`step6`]: the surface area heuristic (SAH) instead of the median split.
 //! 7. [`step7`]: ray packets: up to 64 coherent rays down the tree together.
 //!
@@ -24,10 +25,12 @@
 // solution's copy of this file has no such line.)
 #![allow(unused_imports, unused_variables)]
 
+use rt_core::query::Deduplicated;
 use rt_core::{
-    Aabb, Accel, BallQuery, BuildStats, Bundle, Hit, Primitive, Ray, Region, Stats, Triangle,
+    Aabb, Accel, BallQuery, BuildStats, Hit, Primitive, Ray, RayQuery, Region, Stats, Triangle,
     ValidationError, predicted_cost,
 };
+use rt_simd::Bundle;
 
 pub mod step1;
 pub mod step2;
@@ -280,7 +283,7 @@ impl LabBvh {
 
 impl LabBvh {
     /// The bundle queries with packets: the first `slots` rays sorted into bundles by rt-core
-    /// ([`rt_core::bundle::walk_groups`]); a bundle that misses the root's box answered "no
+    /// ([`rt_simd::bundle::walk_groups`]); a bundle that misses the root's box answered "no
     /// hit" at once; one of directions within [`MAX_SPREAD`] walked by step 7; every other ray
     /// traced by steps 4 and 5. Calls `answer(slot, answer)` for each ray, where an any-hit
     /// answer is `Some` when the ray is blocked.
@@ -292,22 +295,11 @@ impl LabBvh {
         answer: impl FnMut(usize, Option<Hit>),
     ) {
         let bounds = self.bounds();
-        rt_core::bundle::walk_groups::<S, ANY>(
+        rt_simd::bundle::walk_groups::<S, ANY>(
             rays,
             slots,
             stats,
-            |ray, stats| {
-                if ANY {
-                    step5::any_hit(self, ray, stats).then_some(Hit {
-                        prim: 0,
-                        t: f32::NAN,
-                        u: 0.0,
-                        v: 0.0,
-                    })
-                } else {
-                    step4::closest_hit(self, ray, stats)
-                }
-            },
+            |ray, stats| rt_simd::bundle::single::<_, S, ANY>(self, ray, stats),
             |b: &Bundle| b.route(&bounds, |b| b.direction_spread() <= MAX_SPREAD),
             |b, lanes, stats| {
                 step7::walk::<S, ANY>(self, b, lanes, stats);
@@ -371,12 +363,17 @@ impl Accel for LabBvh {
         bvh
     }
 
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        step4::closest_hit(self, ray, stats)
-    }
-
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        step5::any_hit(self, ray, stats)
+    /// The walks of steps 4 and 5: an occlusion query (a shadow ray's) takes step 5's walk,
+    /// every other query step 4's. A query that must see each hit once (all hits, counts) is
+    /// offered each triangle once ([`Deduplicated`]), since the walk may meet a triangle again.
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        if Q::OCCLUSION {
+            step5::any_hit(self, ray, query, stats);
+        } else if Q::REPEATABLE {
+            step4::walk(self, ray, query, stats);
+        } else {
+            step4::walk(self, ray, &mut Deduplicated::new(query), stats);
+        }
     }
 
     /// With [`BvhParams::packets`], coherent rays go down the tree as packets (step 7).

@@ -1,29 +1,44 @@
-//! Step 4: the closest hit.
+//! Step 4: the walk for a query.
+//!
+//! The walk does not decide which hit to keep: it offers each hit it finds to a query
+//! ([`RayQuery::offer`]), and the query keeps what it wants. For the closest hit
+//! ([`ClosestHit`](rt_core::ClosestHit)) that is the best hit by the tie rule
+//! ([`Hit::beats`](rt_core::Hit::beats): smaller `t`, then smaller index), and
+//! [`RayQuery::t_far`], how far along the ray the query still wants hits, is the best `t` so
+//! far.
 //!
 //! Walk the tree with a stack instead of recursion (no call overhead, and a fixed
 //! [`MAX_DEPTH`]-entry array on the stack: no allocation per ray). Push each node with the
-//! distance at which the ray enters its box. Pop a node; if that distance is beyond the best
-//! hit so far, skip it: nothing in its box can be closer. "Beyond" with step 1's margin: the
+//! distance at which the ray enters its box. Pop a node; if that distance is beyond the query's
+//! far end, skip it: nothing in its box can be wanted. "Beyond" with step 1's margin: the
 //! entry distance and a hit's `t` are both rounded, so a hit on a box's face may come out a
-//! hair before the box's entry; skip only what starts beyond `best.t * SLAB_FAR_SCALE`.
-//! Otherwise test a leaf's triangles, or push an interior node's children (step 3), the
-//! farther one first so that the nearer is popped next.
+//! hair before the box's entry; skip only what starts beyond `query.t_far() * SLAB_FAR_SCALE`.
+//! Otherwise offer the query the hits of a leaf's triangles (up to `query.t_far()`), or push an
+//! interior node's children (step 3), the farther one first so that the nearer is popped next.
+//! An offer that returns [`ControlFlow::Break`] ends the walk at once.
 //!
-//! Keep the best hit by the tie rule ([`Hit::beats`]: smaller `t`, then smaller index), so a
-//! node entered exactly at the best `t` must still be visited. Rays outside the trait's
-//! precondition ([`Ray::is_valid`] false: NaN, infinite, zero direction) return `None` at
-//! once, visiting nothing. Report each node visited and each triangle tested to `stats`.
+//! A node entered exactly at the best `t` must still be visited (a tie goes to the smaller
+//! index). Rays outside the trait's precondition ([`Ray::is_valid`] false: NaN, infinite, zero
+//! direction) walk nothing. Report each node visited and each triangle tested to `stats`.
 
 use crate::{LabBvh, MAX_DEPTH, Node, step1, step3};
-use rt_core::{Hit, Primitive, Ray, SLAB_FAR_SCALE, Stats};
+use rt_core::{Primitive, Ray, RayQuery, SLAB_FAR_SCALE, Stats};
+use std::ops::ControlFlow;
 
-/// Tests the triangles of leaf `node` against the ray up to `best.t`, keeping the best hit in
-/// `best` by the tie rule.
-pub fn test_leaf<S: Stats>(bvh: &LabBvh, node: &Node, ray: &Ray, best: &mut Hit, stats: &mut S) {
+/// Tests the triangles of leaf `node` against the ray up to `query.t_far()` and offers
+/// `query` each hit; `Break` when the query ends the walk.
+pub fn test_leaf<Q: RayQuery, S: Stats>(
+    bvh: &LabBvh,
+    node: &Node,
+    ray: &Ray,
+    query: &mut Q,
+    stats: &mut S,
+) -> ControlFlow<()> {
     todo!("step 4: testing a leaf")
 }
 
-/// The closest hit along the ray (ties to the smaller index), or `None`.
-pub fn closest_hit<S: Stats>(bvh: &LabBvh, ray: &Ray, stats: &mut S) -> Option<Hit> {
-    todo!("step 4: the closest hit")
+/// The walk for `query`: every hit in `[ray.t_min, query.t_far()]` offered to it, nearer boxes
+/// first, until it stops the walk.
+pub fn walk<Q: RayQuery, S: Stats>(bvh: &LabBvh, ray: &Ray, query: &mut Q, stats: &mut S) {
+    todo!("step 4: the walk for a query")
 }

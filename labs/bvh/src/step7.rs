@@ -26,14 +26,15 @@
 //! A lane's `t_max` is its best hit so far ([`Lanes::t`], [`Lanes::best_t`]), and
 //! [`Lanes::far_end`] is the largest of them, which bounds every lane's.
 //!
-//! `src/lib.rs` hands your walk the bundles (`rt_core::bundle::walk_groups`): it sorts the
+//! `src/lib.rs` hands your walk the bundles (`rt_simd::bundle::walk_groups`): it sorts the
 //! rays of a call into bundles, answers at once a bundle that misses the root's box, sends
 //! rays that cannot travel together (a zero direction component, directions far apart) down
 //! your single-ray walk of steps 4 and 5, and writes every lane's answer back in its slot.
 
 use crate::{LabBvh, MAX_DEPTH, step3};
-use rt_core::bundle::Lanes;
-use rt_core::{Aabb, Bundle, Stats};
+use rt_core::{Aabb, Stats};
+use rt_simd::Bundle;
+use rt_simd::bundle::Lanes;
 
 /// The lanes of `active` that may enter `bounds`, each lane up to its best hit so far: all of
 /// `active` when its first lane enters (test 1 above); none when the interval bound rules the

@@ -4,9 +4,10 @@
 
 use lab_bvh::{BvhParams, LabBvh, Node, Split, step1, step2, step3, step6, step7};
 use rt_conformance::{SCENES, rays_into_cube, small_triangles};
-use rt_core::bundle::{Group, Lanes, for_each_bundle};
 use rt_core::glam::Vec3;
-use rt_core::{Aabb, Accel, BruteForce, Bundle, Counters, Hit, NoStats, Primitive, Ray, Triangle};
+use rt_core::{Aabb, Accel, BruteForce, Counters, Hit, NoStats, Primitive, Ray, Triangle};
+use rt_simd::Bundle;
+use rt_simd::bundle::{Group, Lanes, for_each_bundle};
 
 /// The triangles below node `i`.
 fn below(bvh: &LabBvh, i: u32) -> Vec<u32> {

@@ -8,8 +8,9 @@
 //! 1. [`step1`]: the box around the scene, and the slab test of a ray against a box.
 //! 2. [`step2`]: the resolution (how many cells), and the build (which triangles in which cell).
 //! 3. [`step3`]: the walk through the cells the ray crosses, in order.
-//! 4. [`step4`]: the closest hit, with the rule for when the walk may stop.
-//! 5. [`step5`]: the any-hit query (shadow rays): stop at the first hit.
+//! 4. [`step4`]: the walk for a query (the closest hit is one), with the rule for when it may
+//!    stop.
+//! 5. [`step5`]: the any-hit walk (shadow rays): stop at the first hit.
 //! 6. [`step6`]: mailboxing: a triangle in several cells is tested once per ray.
 //!
 //! Nothing outside the step files needs to change: this file wires them into the
@@ -20,7 +21,8 @@
 #![allow(unused_imports, unused_variables)]
 
 use rt_core::glam::Vec3;
-use rt_core::{Aabb, Accel, BallQuery, BuildStats, Hit, Ray, Region, Stats, Triangle};
+use rt_core::query::Deduplicated;
+use rt_core::{Aabb, Accel, BallQuery, BuildStats, Ray, RayQuery, Region, Stats, Triangle};
 
 pub mod step1;
 pub mod step2;
@@ -160,12 +162,17 @@ impl Accel for LabGrid {
         grid
     }
 
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        step4::closest_hit(self, ray, stats)
-    }
-
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        step5::any_hit(self, ray, stats)
+    /// The walks of steps 4 and 5: an occlusion query (a shadow ray's) takes step 5's walk,
+    /// every other query step 4's. A query that must see each hit once (all hits, counts) is
+    /// offered each triangle once ([`Deduplicated`]), since the walk may meet a triangle again.
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        if Q::OCCLUSION {
+            step5::any_hit(self, ray, query, stats);
+        } else if Q::REPEATABLE {
+            step4::walk(self, ray, query, stats);
+        } else {
+            step4::walk(self, ray, &mut Deduplicated::new(query), stats);
+        }
     }
 
     fn bounds(&self) -> Aabb {

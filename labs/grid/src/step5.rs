@@ -1,12 +1,17 @@
 //! Step 5: the any-hit query, for shadow rays.
 //!
-//! A shadow ray only asks whether anything lies in `[t_min, t_max]`: the first hit found in
-//! any cell answers it, so no ordering rule is needed and the walk stops at once.
+//! A shadow ray only asks whether anything lies in `[t_min, t_max]`: its query
+//! ([`AnyHit`](rt_core::AnyHit)) is an occlusion query ([`RayQuery::OCCLUSION`]), which takes
+//! the first hit found in any cell, so no ordering rule is needed and the walk stops at once.
+//! It needs no `t`, `u` or `v` either: test with the yes-or-no [`Primitive::occludes`] (up to
+//! `query.t_far()`) and offer the query the first triangle that blocks as [`BLOCKS`].
 
-use crate::{LabGrid, step1, step3, step4, step6};
-use rt_core::{Hit, Ray, Stats};
+use crate::{LabGrid, step1, step3, step6};
+use rt_core::query::BLOCKS;
+use rt_core::{Primitive, Ray, RayQuery, Stats};
 
-/// Whether anything is hit in the ray's interval; stops at the first hit found.
-pub fn any_hit<S: Stats>(grid: &LabGrid, ray: &Ray, stats: &mut S) -> bool {
+/// The occlusion walk for `query`: the first triangle that blocks the ray within
+/// `[t_min, query.t_far()]` is offered to it, and ends the walk.
+pub fn any_hit<Q: RayQuery, S: Stats>(grid: &LabGrid, ray: &Ray, query: &mut Q, stats: &mut S) {
     todo!("step 5: the any-hit walk")
 }

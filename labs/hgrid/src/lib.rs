@@ -13,8 +13,9 @@
 //!    started in a grid.
 //! 2. [`step2`]: the cells beside the path, where two boundaries are crossed at once.
 //! 3. [`step3`]: the nested walk over the cells, front to back, with a stack of DDAs.
-//! 4. [`step4`]: the closest hit, with the rule for when the walk may stop, and a mailbox.
-//! 5. [`step5`]: the any-hit query (shadow rays): stop at the first hit.
+//! 4. [`step4`]: the walk for a query (the closest hit is one), with the rule for when it may
+//!    stop, and a mailbox.
+//! 5. [`step5`]: the any-hit walk (shadow rays): stop at the first hit.
 //!
 //! Nothing outside the step files needs to change: this file builds the hierarchy and wires the
 //! steps into the [`rt_core::Accel`] trait, so the conformance kit and the shootout can run
@@ -24,7 +25,8 @@
 // solution's copy of this file has no such line.)
 #![allow(unused_imports, unused_variables)]
 
-use rt_core::{Aabb, Accel, BallQuery, BuildStats, Hit, Ray, Region, Stats, Triangle};
+use rt_core::query::Deduplicated;
+use rt_core::{Aabb, Accel, BallQuery, BuildStats, Ray, RayQuery, Region, Stats, Triangle};
 use rt_hgrid::HGrid;
 
 pub use rt_grid::GridShape;
@@ -85,12 +87,17 @@ impl Accel for LabHGrid {
         }
     }
 
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        step4::closest_hit(self, ray, stats)
-    }
-
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        step5::any_hit(self, ray, stats)
+    /// The walks of steps 4 and 5: an occlusion query (a shadow ray's) takes step 5's walk,
+    /// every other query step 4's. A query that must see each hit once (all hits, counts) is
+    /// offered each triangle once ([`Deduplicated`]), since the walk may meet a triangle again.
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        if Q::OCCLUSION {
+            step5::any_hit(self, ray, query, stats);
+        } else if Q::REPEATABLE {
+            step4::walk(self, ray, query, stats);
+        } else {
+            step4::walk(self, ray, &mut Deduplicated::new(query), stats);
+        }
     }
 
     fn bounds(&self) -> Aabb {

@@ -1,8 +1,15 @@
-//! Step 4: the closest hit, and when the walk may stop.
+//! Step 4: the walk for a query, and when it may stop.
 //!
-//! Test the triangles of each cell the walk reaches, keeping the best hit by the tie rule
-//! ([`Hit::beats`]: smaller `t`, then smaller index), and give the walk the best `t` so far as
-//! its limit. The trap, as in the uniform grid: a triangle is listed in every cell its surface
+//! The walk does not decide which hit to keep: it offers each hit it finds to a query
+//! ([`RayQuery::offer`]), and the query keeps what it wants. For the closest hit
+//! ([`ClosestHit`](rt_core::ClosestHit)) that is the best hit by the tie rule
+//! ([`Hit::beats`](rt_core::Hit::beats): smaller `t`, then smaller index), and
+//! [`RayQuery::t_far`], how far along the ray the query still wants hits, is the best `t` so
+//! far. Test the triangles of each cell the walk reaches up to `query.t_far()`, offer each
+//! hit, and give the walk `query.t_far()` as its limit; an offer that returns
+//! [`ControlFlow::Break`] ends the walk at once (a limit of `f32::NEG_INFINITY`).
+//!
+//! The trap, as in the uniform grid: a triangle is listed in every cell its surface
 //! overlaps, in every grid of the hierarchy, so it can be hit *beyond* the current cell while a
 //! closer one waits in the next cell (or in a nested grid the walk has not entered yet).
 //! Stopping at the first cell with a hit returns the wrong one; the limit lets the walk go on
@@ -14,25 +21,28 @@
 //! Report each triangle tested as `stats.prim_test()`.
 
 use crate::{LabHGrid, step3};
-use rt_core::{Hit, Mailbox, Primitive, Ray, Stats};
+use rt_core::{Mailbox, Primitive, Ray, RayQuery, Stats};
+use std::ops::ControlFlow;
 
 /// How many recently tested triangles a ray remembers.
 pub const MAILBOX: usize = 8;
 
-/// Tests the triangles `ids` against the ray up to `best.t`, updating `best` by the tie rule;
-/// skips (and reports) those the mailbox has seen, unless the mailbox is off.
-pub fn test_cell<S: Stats>(
+/// Tests the triangles of the cell, `ids`, against the ray up to `query.t_far()` and offers
+/// `query` each hit; `Break` when the query ends the walk. Skips (and reports) the triangles
+/// the mailbox has seen, unless the mailbox is off.
+pub fn test_cell<Q: RayQuery, S: Stats>(
     lab: &LabHGrid,
     ids: &[u32],
     ray: &Ray,
-    best: &mut Hit,
+    query: &mut Q,
     mailbox: &mut Mailbox<MAILBOX>,
     stats: &mut S,
-) {
+) -> ControlFlow<()> {
     todo!("step 4: testing a cell")
 }
 
-/// The closest hit along the ray (ties to the smaller index), or `None`.
-pub fn closest_hit<S: Stats>(lab: &LabHGrid, ray: &Ray, stats: &mut S) -> Option<Hit> {
-    todo!("step 4: the closest hit")
+/// The walk for `query`: every hit in `[ray.t_min, query.t_far()]` offered to it, until it
+/// stops the walk.
+pub fn walk<Q: RayQuery, S: Stats>(lab: &LabHGrid, ray: &Ray, query: &mut Q, stats: &mut S) {
+    todo!("step 4: the walk for a query")
 }

@@ -11,8 +11,9 @@
 //! 1. [`step1`]: where the ray crosses a node's plane, and which child it meets first.
 //! 2. [`step2`]: which children the interval `[t0, t1]` reaches, with the corner cases.
 //! 3. [`step3`]: the walk over the leaves, in order, with a stack of far children.
-//! 4. [`step4`]: the closest hit, with the rule for when the walk may stop, and a mailbox.
-//! 5. [`step5`]: the any-hit query (shadow rays): stop at the first hit.
+//! 4. [`step4`]: the walk for a query (the closest hit is one), with the rule for when it may
+//!    stop, and a mailbox.
+//! 5. [`step5`]: the any-hit walk (shadow rays): stop at the first hit.
 //!
 //! Nothing outside the step files needs to change: this file builds the tree and wires the
 //! steps into the [`rt_core::Accel`] trait, so the conformance kit and the shootout can run
@@ -22,7 +23,8 @@
 // solution's copy of this file has no such line.)
 #![allow(unused_imports, unused_variables)]
 
-use rt_core::{Aabb, Accel, BallQuery, BuildStats, Hit, Ray, Region, Stats, Triangle};
+use rt_core::query::Deduplicated;
+use rt_core::{Aabb, Accel, BallQuery, BuildStats, Ray, RayQuery, Region, Stats, Triangle};
 use rt_kdtree::{KdParams, KdTree};
 
 pub use rt_kdtree::{MAX_DEPTH, Node};
@@ -86,12 +88,17 @@ impl Accel for LabKdTree {
         }
     }
 
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        step4::closest_hit(self, ray, stats)
-    }
-
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        step5::any_hit(self, ray, stats)
+    /// The walks of steps 4 and 5: an occlusion query (a shadow ray's) takes step 5's walk,
+    /// every other query step 4's. A query that must see each hit once (all hits, counts) is
+    /// offered each triangle once ([`Deduplicated`]), since the walk may meet a triangle again.
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        if Q::OCCLUSION {
+            step5::any_hit(self, ray, query, stats);
+        } else if Q::REPEATABLE {
+            step4::walk(self, ray, query, stats);
+        } else {
+            step4::walk(self, ray, &mut Deduplicated::new(query), stats);
+        }
     }
 
     fn bounds(&self) -> Aabb {

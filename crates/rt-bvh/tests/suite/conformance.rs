@@ -5,6 +5,12 @@
 use rt_bvh::{Ablation, Bvh, BvhParams, Kernels};
 use rt_conformance::SCENES;
 use rt_core::{Accel, Sphere, Triangle};
+use rt_simd::Isa;
+
+/// SSE2 where the target has it, else the portable kernels.
+fn sse2() -> Kernels {
+    Kernels::Simd(Isa::sse2().unwrap_or(Isa::Portable))
+}
 
 fn wide_with(kernels: Kernels) -> BvhParams {
     BvhParams {
@@ -14,8 +20,12 @@ fn wide_with(kernels: Kernels) -> BvhParams {
 }
 
 rt_conformance::conformance_tests!(wide, Bvh<Triangle>, BvhParams::wide());
-rt_conformance::conformance_tests!(wide_sse2, Bvh<Triangle>, wide_with(Kernels::Sse2));
-rt_conformance::conformance_tests!(wide_portable, Bvh<Triangle>, wide_with(Kernels::Portable));
+rt_conformance::conformance_tests!(wide_sse2, Bvh<Triangle>, wide_with(sse2()));
+rt_conformance::conformance_tests!(
+    wide_portable,
+    Bvh<Triangle>,
+    wide_with(Kernels::Simd(Isa::Portable))
+);
 rt_conformance::conformance_tests!(wide_scalar, Bvh<Triangle>, wide_with(Kernels::Scalar));
 rt_conformance::conformance_tests!(
     wide_sequential,
@@ -54,8 +64,8 @@ fn spheres() {
     rt_conformance::check_random_spheres::<Bvh<Sphere>>(&BvhParams::sah());
     // Spheres are no triangles: the wide tree keeps them in primitive leaves.
     rt_conformance::check_random_spheres::<Bvh<Sphere>>(&BvhParams::wide());
-    rt_conformance::check_random_spheres::<Bvh<Sphere>>(&wide_with(Kernels::Portable));
-    rt_conformance::check_random_spheres::<Bvh<Sphere>>(&wide_with(Kernels::Sse2));
+    rt_conformance::check_random_spheres::<Bvh<Sphere>>(&wide_with(Kernels::Simd(Isa::Portable)));
+    rt_conformance::check_random_spheres::<Bvh<Sphere>>(&wide_with(sse2()));
 }
 
 #[test]

@@ -149,16 +149,11 @@ fn compare<P: Primitive>(tree: &Bvh<P>, kernels: Kernels, rays: &[Ray]) -> usize
     hits
 }
 
-/// The SIMD kernels this machine runs.
+/// The SIMD kernels this machine runs: every instruction set it has.
 fn simd_kernels() -> Vec<Kernels> {
-    let mut k = vec![Kernels::Portable];
-    let mut probe = Bvh::build(&[] as &[Triangle], &BvhParams::wide());
-    if probe.set_kernels(Kernels::Sse2) {
-        k.push(Kernels::Sse2);
-    }
-    if probe.set_kernels(Kernels::Avx2) {
-        k.push(Kernels::Avx2);
-    } else {
+    let isas = rt_simd::Isa::all_available();
+    let k: Vec<Kernels> = isas.iter().map(|&i| Kernels::Simd(i)).collect();
+    if rt_simd::Isa::avx2().is_none() {
         #[cfg(target_arch = "x86_64")]
         {
             let ci = std::env::var("CI").is_ok_and(|v| v == "true");

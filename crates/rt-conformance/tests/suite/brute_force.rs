@@ -5,10 +5,18 @@ use rt_conformance::SCENES;
 use rt_core::{Accel, BruteForce, Primitive, Ray, Triangle};
 
 rt_conformance::conformance_tests!(brute_force, BruteForce<Triangle>, ());
+// The reference `compare` checks with: brute force whose bundle queries test every triangle
+// against a bundle's lanes (rt-simd's lane kernels).
+rt_conformance::conformance_tests!(
+    bundled_brute_force,
+    rt_simd::BundledBruteForce<Triangle>,
+    ()
+);
 
 #[test]
 fn spheres() {
     rt_conformance::check_random_spheres::<BruteForce<rt_core::Sphere>>(&());
+    rt_conformance::check_random_spheres::<rt_simd::BundledBruteForce<rt_core::Sphere>>(&());
 }
 
 /// Möller–Trumbore in f64: (t, min barycentric margin, |det| relative to edge lengths).

@@ -1,6 +1,6 @@
 //! A small structure of the kind a student writes first, for the shootout example and its test.
 
-use rt_core::{Aabb, Accel, BallQuery, BuildStats, Hit, Primitive, Ray, Stats, Triangle};
+use rt_core::{Aabb, Accel, BallQuery, BuildStats, Primitive, Ray, RayQuery, Stats, Triangle};
 
 /// A one-level hierarchy: triangles sorted along x in groups of 16, each group with its box; a
 /// ray tests every group's box, then the triangles of the groups it enters.
@@ -35,35 +35,25 @@ impl Accel for Groups {
             .collect();
         Self { tris, boxes }
     }
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
+    /// Offers the query every hit in the groups whose box the ray enters before its far end.
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
         if !ray.is_valid() {
-            return None;
+            return;
         }
-        let mut best: Option<Hit> = None;
         for (g, b) in self.boxes.iter().enumerate() {
             stats.node_visit();
-            if b.intersect(ray, ray.t_max).is_none() {
+            if b.intersect(ray, query.t_far()).is_none() {
                 continue;
             }
             for &(id, t) in &self.tris[g * GROUP..((g + 1) * GROUP).min(self.tris.len())] {
                 stats.prim_test();
-                let t_max = best.map_or(ray.t_max, |h| h.t);
-                if let Some(h) = t.intersect(ray, t_max)
-                    && best.is_none_or(|b| Hit::beats(h.t, id, b.t, b.prim))
+                if let Some(h) = t.intersect(ray, query.t_far())
+                    && query.offer(id, h).is_break()
                 {
-                    best = Some(Hit {
-                        prim: id,
-                        t: h.t,
-                        u: h.u,
-                        v: h.v,
-                    });
+                    return;
                 }
             }
         }
-        best
-    }
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.intersect_with(ray, stats).is_some()
     }
     fn bounds(&self) -> Aabb {
         self.boxes.iter().fold(Aabb::EMPTY, |a, b| a.union(*b))

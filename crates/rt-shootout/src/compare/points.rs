@@ -13,11 +13,9 @@ use super::run::make_rays;
 use super::{Args, Report, Row, Source, build_fastest, checked_subset};
 use crate::structures;
 use rt_core::glam::Vec3;
-use rt_core::{
-    Aabb, Counters, DynAccel, Hit, PointHit, PrimHit, Primitive, Ray, Rng, SignedPoint, Triangle,
-    WindingTree,
-};
+use rt_core::{Aabb, Counters, DynAccel, Hit, PointHit, PrimHit, Primitive, Ray, Rng, Triangle};
 use rt_scene::raygen;
+use rt_sdf::{SignedPoint, WindingTree};
 use std::fmt::Debug;
 use std::time::{Duration, Instant};
 
@@ -185,7 +183,7 @@ impl Queries for Overlaps {
     }
 }
 
-/// Signed distances ([`Accel::signed_distance`](rt_core::Accel::signed_distance)) at the
+/// Signed distances (`rt_sdf::SignedDistance::signed_distance`) at the
 /// closest-point queries' points: every row signs its closest point with one shared
 /// [`WindingTree`]; brute force signs its own with the exact winding number.
 struct SignedDistances;

@@ -377,7 +377,7 @@ impl Source {
         let field = scenes::instance_field(&bounds, count, args.seed);
         let mut world = Aabb::EMPTY;
         for xf in &field {
-            let t = rt_core::InstanceTransform::new(*xf).map_err(|e| e.to_string())?;
+            let t = rt_instance::InstanceTransform::new(*xf).map_err(|e| e.to_string())?;
             world = world.union(t.world_bounds(&bounds).0);
         }
         Ok(Self {
@@ -402,7 +402,7 @@ impl Source {
         };
         Ok(if entry.name == "brute-force" {
             Arc::new(
-                structures::Field::<rt_core::LinearInstances<Triangle>>::new(
+                structures::Field::<rt_instance::LinearInstances<Triangle>>::new(
                     self.mesh.clone(),
                     field,
                     &entry.build,

@@ -1,18 +1,23 @@
 //! Step 5: the any-hit query.
 //!
-//! A shadow ray asks only whether anything lies between a point and a light: the first
-//! triangle found that blocks it ends the walk, whichever it is. So nothing needs sorting and
-//! no interval shrinks: visit every node whose box the ray enters within its interval, in any
-//! order, and stop at the first [`Primitive::occludes`]. Invalid rays return `false` at once.
+//! A shadow ray asks only whether anything lies between a point and a light: its query
+//! ([`AnyHit`](rt_core::AnyHit)) is an occlusion query ([`RayQuery::OCCLUSION`]), and the
+//! first triangle found that blocks it ends the walk, whichever it is. So nothing needs sorting
+//! and no interval shrinks: visit every node whose box the ray enters within
+//! `[t_min, query.t_far()]`, in any order, and stop at the first [`Primitive::occludes`] (which
+//! needs no `t`, `u` or `v`), offering the query that triangle as [`BLOCKS`]. Invalid rays walk
+//! nothing.
 
 use crate::{LabBvh, MAX_DEPTH, step1};
-use rt_core::{Primitive, Ray, Stats};
+use rt_core::query::BLOCKS;
+use rt_core::{Primitive, Ray, RayQuery, Stats};
 
-/// Whether any triangle is hit within the ray's interval.
-pub fn any_hit<S: Stats>(bvh: &LabBvh, ray: &Ray, stats: &mut S) -> bool {
+/// The occlusion walk for `query`: the first triangle that blocks the ray within
+/// `[t_min, query.t_far()]` is offered to it, and ends the walk.
+pub fn any_hit<Q: RayQuery, S: Stats>(bvh: &LabBvh, ray: &Ray, query: &mut Q, stats: &mut S) {
     // BEGIN SOLUTION step 5: the any hit
     if !ray.is_valid() || bvh.nodes.is_empty() {
-        return false;
+        return;
     }
     let mut stack = [0u32; MAX_DEPTH];
     let mut len = 1;
@@ -20,7 +25,7 @@ pub fn any_hit<S: Stats>(bvh: &LabBvh, ray: &Ray, stats: &mut S) -> bool {
         len -= 1;
         let i = stack[len];
         let node = &bvh.nodes[i as usize];
-        if step1::entry(&node.bounds, ray, ray.t_max).is_infinite() {
+        if step1::entry(&node.bounds, ray, query.t_far()).is_infinite() {
             continue;
         }
         stats.node_visit();
@@ -33,11 +38,11 @@ pub fn any_hit<S: Stats>(bvh: &LabBvh, ray: &Ray, stats: &mut S) -> bool {
         }
         for &id in bvh.leaf_ids(node) {
             stats.prim_test();
-            if bvh.tris[id as usize].occludes(ray, ray.t_max) {
-                return true;
+            if bvh.tris[id as usize].occludes(ray, query.t_far()) {
+                let _ = query.offer(id, BLOCKS);
+                return;
             }
         }
     }
-    false
     // END SOLUTION
 }

@@ -1,33 +1,40 @@
 //! Step 5: the any-hit query, for shadow rays.
 //!
-//! A shadow ray only asks whether anything lies in `[t_min, t_max]`: the first hit found in
-//! any cell answers it, so no ordering rule is needed and the walk stops at once.
+//! A shadow ray only asks whether anything lies in `[t_min, t_max]`: its query
+//! ([`AnyHit`](rt_core::AnyHit)) is an occlusion query ([`RayQuery::OCCLUSION`]), which takes
+//! the first hit found in any cell, so no ordering rule is needed and the walk stops at once.
+//! It needs no `t`, `u` or `v` either: test with the yes-or-no [`Primitive::occludes`] (up to
+//! `query.t_far()`) and offer the query the first triangle that blocks as [`BLOCKS`].
 
-use crate::{LabGrid, step1, step3, step4, step6};
-use rt_core::{Hit, Ray, Stats};
+use crate::{LabGrid, step1, step3, step6};
+use rt_core::query::BLOCKS;
+use rt_core::{Primitive, Ray, RayQuery, Stats};
 
-/// Whether anything is hit in the ray's interval; stops at the first hit found.
-pub fn any_hit<S: Stats>(grid: &LabGrid, ray: &Ray, stats: &mut S) -> bool {
+/// The occlusion walk for `query`: the first triangle that blocks the ray within
+/// `[t_min, query.t_far()]` is offered to it, and ends the walk.
+pub fn any_hit<Q: RayQuery, S: Stats>(grid: &LabGrid, ray: &Ray, query: &mut Q, stats: &mut S) {
     // BEGIN SOLUTION step 5: the any-hit walk
     if !ray.is_valid() || grid.refs.is_empty() {
-        return false;
+        return;
     }
-    let Some((t0, t1)) = step1::slab(&grid.bounds, ray, ray.t_max) else {
-        return false;
-    };
-    let mut best = Hit {
-        prim: u32::MAX,
-        t: ray.t_max,
-        u: 0.0,
-        v: 0.0,
+    let Some((t0, t1)) = step1::slab(&grid.bounds, ray, query.t_far()) else {
+        return;
     };
     let mut mailbox = step6::RayMailbox::new();
-    let mut found = false;
     step3::walk(grid, ray, t0, t1, |cell, _, _| {
         stats.node_visit();
-        found = step4::test_cell(grid, cell, ray, &mut best, &mut mailbox, true, stats);
-        found
+        for &id in grid.cell(cell) {
+            if grid.params.mailbox && mailbox.seen(id) {
+                stats.mailbox_skip();
+                continue;
+            }
+            stats.prim_test();
+            if grid.tris[id as usize].occludes(ray, query.t_far()) {
+                let _ = query.offer(id, BLOCKS);
+                return true;
+            }
+        }
+        false
     });
-    found
     // END SOLUTION
 }

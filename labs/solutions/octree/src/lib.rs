@@ -13,15 +13,17 @@
 //! 2. [`step2`]: the mid-planes' parameters, a child's faces from its parent's, and the order
 //!    in which the ray passes through a node's children.
 //! 3. [`step3`]: the walk over the leaves, front to back, with a stack of nodes.
-//! 4. [`step4`]: the closest hit, with the rule for when the walk may stop, and a mailbox.
-//! 5. [`step5`]: the any-hit query (shadow rays): stop at the first hit.
+//! 4. [`step4`]: the walk for a query (the closest hit is one), with the rule for when it may
+//!    stop, and a mailbox.
+//! 5. [`step5`]: the any-hit walk (shadow rays): stop at the first hit.
 //!
 //! Nothing outside the step files needs to change: this file builds the tree, gives the cut
 //! every node is made at, and wires the steps into the [`rt_core::Accel`] trait, so the
 //! conformance kit and the shootout can run your traversal.
 
 use rt_core::glam::Vec3;
-use rt_core::{Aabb, Accel, BallQuery, BuildStats, Hit, Ray, Region, Stats, Triangle};
+use rt_core::query::Deduplicated;
+use rt_core::{Aabb, Accel, BallQuery, BuildStats, Ray, RayQuery, Region, Stats, Triangle};
 use rt_octree::Octree;
 
 pub use rt_octree::{Block, MAX_DEPTH, Node, OctreeParams};
@@ -103,12 +105,17 @@ impl Accel for LabOctree {
         }
     }
 
-    fn intersect_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> Option<Hit> {
-        step4::closest_hit(self, ray, stats)
-    }
-
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        step5::any_hit(self, ray, stats)
+    /// The walks of steps 4 and 5: an occlusion query (a shadow ray's) takes step 5's walk,
+    /// every other query step 4's. A query that must see each hit once (all hits, counts) is
+    /// offered each triangle once ([`Deduplicated`]), since the walk may meet a triangle again.
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        if Q::OCCLUSION {
+            step5::any_hit(self, ray, query, stats);
+        } else if Q::REPEATABLE {
+            step4::walk(self, ray, query, stats);
+        } else {
+            step4::walk(self, ray, &mut Deduplicated::new(query), stats);
+        }
     }
 
     fn bounds(&self) -> Aabb {

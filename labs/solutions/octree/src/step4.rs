@@ -1,8 +1,15 @@
-//! Step 4: the closest hit, and when the walk may stop.
+//! Step 4: the walk for a query, and when it may stop.
 //!
-//! Test the triangles of each leaf the walk reaches, keeping the best hit by the tie rule
-//! ([`Hit::beats`]: smaller `t`, then smaller index), and give the walk the best `t` so far as
-//! its limit. The trap, as in a grid or a kd-tree: the octree lists a triangle in every leaf its
+//! The walk does not decide which hit to keep: it offers each hit it finds to a query
+//! ([`RayQuery::offer`]), and the query keeps what it wants. For the closest hit
+//! ([`ClosestHit`](rt_core::ClosestHit)) that is the best hit by the tie rule
+//! ([`Hit::beats`](rt_core::Hit::beats): smaller `t`, then smaller index), and
+//! [`RayQuery::t_far`], how far along the ray the query still wants hits, is the best `t` so
+//! far. Test the triangles of each leaf the walk reaches up to `query.t_far()`, offer each
+//! hit, and give the walk `query.t_far()` as its limit; an offer that returns
+//! [`ControlFlow::Break`] ends the walk at once (a limit of `f32::NEG_INFINITY`).
+//!
+//! The trap, as in a grid or a kd-tree: the octree lists a triangle in every leaf its
 //! surface overlaps, so a triangle can be hit *beyond* the current leaf while a closer one waits
 //! in the next leaf. Stopping at the first leaf with a hit returns the wrong one; the limit lets
 //! the walk go on to every leaf that starts before the best hit, and no further.
@@ -13,21 +20,23 @@
 //! Report each triangle tested as `stats.prim_test()`.
 
 use crate::{LabOctree, Node, step3};
-use rt_core::{Hit, Mailbox, Primitive, Ray, Stats};
+use rt_core::{Mailbox, Primitive, Ray, RayQuery, Stats};
+use std::ops::ControlFlow;
 
 /// How many recently tested triangles a ray remembers.
 pub const MAILBOX: usize = 8;
 
-/// Tests the triangles of leaf `node` against the ray up to `best.t`, updating `best` by the
-/// tie rule; skips (and reports) those the mailbox has seen, unless the mailbox is off.
-pub fn test_leaf<S: Stats>(
+/// Tests the triangles of leaf `node` against the ray up to `query.t_far()` and offers
+/// `query` each hit; `Break` when the query ends the walk. Skips (and reports) the triangles
+/// the mailbox has seen, unless the mailbox is off.
+pub fn test_leaf<Q: RayQuery, S: Stats>(
     lab: &LabOctree,
     node: &Node,
     ray: &Ray,
-    best: &mut Hit,
+    query: &mut Q,
     mailbox: &mut Mailbox<MAILBOX>,
     stats: &mut S,
-) {
+) -> ControlFlow<()> {
     // BEGIN SOLUTION step 4: testing a leaf
     for &id in lab.leaf_ids(node) {
         if !lab.params.no_mailbox && mailbox.check_and_insert(id) {
@@ -35,34 +44,24 @@ pub fn test_leaf<S: Stats>(
             continue;
         }
         stats.prim_test();
-        if let Some(h) = lab.tris[id as usize].intersect(ray, best.t)
-            && Hit::beats(h.t, id, best.t, best.prim)
-        {
-            *best = Hit {
-                prim: id,
-                t: h.t,
-                u: h.u,
-                v: h.v,
-            };
+        if let Some(h) = lab.tris[id as usize].intersect(ray, query.t_far()) {
+            query.offer(id, h)?;
         }
     }
+    ControlFlow::Continue(())
     // END SOLUTION
 }
 
-/// The closest hit along the ray (ties to the smaller index), or `None`.
-pub fn closest_hit<S: Stats>(lab: &LabOctree, ray: &Ray, stats: &mut S) -> Option<Hit> {
-    // BEGIN SOLUTION step 4: the closest hit
-    let mut best = Hit {
-        prim: u32::MAX,
-        t: ray.t_max,
-        u: 0.0,
-        v: 0.0,
-    };
+/// The walk for `query`: every hit in `[ray.t_min, query.t_far()]` offered to it, until it
+/// stops the walk.
+pub fn walk<Q: RayQuery, S: Stats>(lab: &LabOctree, ray: &Ray, query: &mut Q, stats: &mut S) {
+    // BEGIN SOLUTION step 4: the walk for a query
     let mut mailbox = Mailbox::new();
     step3::walk(lab, ray, stats, |leaf, _, _, stats| {
-        test_leaf(lab, leaf, ray, &mut best, &mut mailbox, stats);
-        best.t
+        match test_leaf(lab, leaf, ray, query, &mut mailbox, stats) {
+            ControlFlow::Break(()) => f32::NEG_INFINITY,
+            ControlFlow::Continue(()) => query.t_far(),
+        }
     });
-    (best.prim != u32::MAX).then_some(best)
     // END SOLUTION
 }

@@ -1,21 +1,27 @@
 //! Step 5: the any-hit query.
 //!
-//! A shadow ray only asks whether anything blocks it: the first triangle found that does
-//! ([`Primitive::occludes`] within the ray's whole interval) ends the walk, whichever leaf it
+//! A shadow ray only asks whether anything blocks it: its query ([`AnyHit`](rt_core::AnyHit))
+//! is an occlusion query ([`RayQuery::OCCLUSION`]). The first triangle found that blocks the
+//! ray ([`Primitive::occludes`] within `[t_min, query.t_far()]`, which needs no `t`, `u` or
+//! `v`) is offered to it as [`BLOCKS`] and ends the walk, whichever leaf it
 //! lies in and wherever along the ray. The walk of step 3 is all you need: a limit of
-//! `f32::NEG_INFINITY` ends it. Invalid rays return `false` (the walk visits nothing for them).
+//! `f32::NEG_INFINITY` ends it. Invalid rays walk nothing
+//! (the walk visits nothing for them).
 
 use crate::{LabOctree, step3};
-use rt_core::{Primitive, Ray, Stats};
+use rt_core::query::BLOCKS;
+use rt_core::{Primitive, Ray, RayQuery, Stats};
 
-/// Whether any triangle is hit within the ray's interval.
-pub fn any_hit<S: Stats>(lab: &LabOctree, ray: &Ray, stats: &mut S) -> bool {
+/// The occlusion walk for `query`: the first triangle that blocks the ray within
+/// `[t_min, query.t_far()]` is offered to it, and ends the walk.
+pub fn any_hit<Q: RayQuery, S: Stats>(lab: &LabOctree, ray: &Ray, query: &mut Q, stats: &mut S) {
     // BEGIN SOLUTION step 5: the any hit
     let mut hit = false;
     step3::walk(lab, ray, stats, |leaf, _, _, stats| {
         for &id in lab.leaf_ids(leaf) {
             stats.prim_test();
-            if lab.tris[id as usize].occludes(ray, ray.t_max) {
+            if lab.tris[id as usize].occludes(ray, query.t_far()) {
+                let _ = query.offer(id, BLOCKS);
                 hit = true;
                 break;
             }
@@ -26,6 +32,5 @@ pub fn any_hit<S: Stats>(lab: &LabOctree, ray: &Ray, stats: &mut S) -> bool {
             f32::INFINITY
         }
     });
-    hit
     // END SOLUTION
 }

@@ -1,12 +1,12 @@
 //! Two-level scenes: built structures placed many times with affine transforms, without copying
 //! their geometry.
 //!
-//! An [`Instance`] is a bottom-level structure (any [`Accel`](crate::Accel), behind the object-safe
+//! An [`Instance`] is a bottom-level structure (any [`Accel`](rt_core::Accel), behind the object-safe
 //! [`DynAccel`] trait, so a kd-tree and a grid can sit side by side), an
 //! [`InstanceTransform`] from its object space to the world, and the caller's id. A two-level
 //! scene ([`TwoLevel`]) answers rays and closest-point queries over all its instances:
 //! rt-bvh's `Instances` with a BVH over the instances' world boxes, [`LinearInstances`] by
-//! visiting every instance (the reference, as [`BruteForce`](crate::BruteForce) is for
+//! visiting every instance (the reference, as [`BruteForce`](rt_core::BruteForce) is for
 //! primitives).
 //!
 //! # What an instance answers
@@ -35,11 +35,13 @@
 //! to the triangle on the other side of it, or miss at a silhouette. The conformance kit checks
 //! both (`rt_conformance::check_two_level_case`).
 
-use crate::{
+#![warn(missing_docs)]
+
+use glam::{Affine3A, DMat3, DVec3, Mat3A, Vec3, Vec3A};
+use rt_core::{
     Aabb, BallQuery, Counters, DynAccel, Feature, Hit, MtTriangle, NoStats, Primitive, Ray, Stats,
     Triangle, closest_feature_on_triangle, point_distance,
 };
-use glam::{Affine3A, DMat3, DVec3, Mat3A, Vec3, Vec3A};
 use std::fmt::Debug;
 use std::sync::Arc;
 
@@ -76,7 +78,8 @@ impl std::error::Error for InstanceError {}
 /// the two-level traversals prune with.
 ///
 /// ```
-/// use rt_core::{InstanceTransform, Ray, glam::{Affine3A, Vec3}};
+/// use rt_core::{Ray, glam::{Affine3A, Vec3}};
+/// use rt_instance::InstanceTransform;
 /// let xf = InstanceTransform::new(Affine3A::from_scale_rotation_translation(
 ///     Vec3::new(2.0, 1.0, 1.0), Default::default(), Vec3::new(10.0, 0.0, 0.0))).unwrap();
 /// let ray = xf.ray_to_object(&Ray::new(Vec3::new(14.0, 0.0, -5.0), Vec3::Z));
@@ -354,7 +357,8 @@ fn counted<S: Stats, R>(stats: &mut S, f: impl FnOnce(Option<&mut Counters>) -> 
 /// transform to the world and the caller's id.
 ///
 /// ```
-/// use rt_core::{Accel, BruteForce, Instance, Ray, Triangle, glam::{Affine3A, Vec3}};
+/// use rt_core::{Accel, BruteForce, Ray, Triangle, glam::{Affine3A, Vec3}};
+/// use rt_instance::Instance;
 /// use std::sync::Arc;
 /// let tri = [Triangle::new(Vec3::ZERO, Vec3::X, Vec3::Y)];
 /// let mesh = Arc::new(BruteForce::build(&tri, &()));
@@ -555,15 +559,15 @@ pub struct InstancePointHit {
     pub point: Vec3,
     /// Its distance from the query point ([`point_distance`]).
     pub distance: f32,
-    /// The part of the primitive it lies on ([`PointHit::feature`](crate::PointHit)).
+    /// The part of the primitive it lies on ([`PointHit::feature`](rt_core::PointHit)).
     pub feature: Feature,
 }
 
 impl InstancePointHit {
     /// Whether two answers agree: both none, or the same instance and primitive at distances
-    /// as [`PointHit::agree`](crate::PointHit::agree) allows.
+    /// as [`PointHit::agree`](rt_core::PointHit::agree) allows.
     pub fn agree(a: Option<InstancePointHit>, b: Option<InstancePointHit>) -> bool {
-        let one = |h: InstancePointHit| crate::PointHit {
+        let one = |h: InstancePointHit| rt_core::PointHit {
             prim: h.prim,
             point: h.point,
             distance: h.distance,
@@ -572,7 +576,7 @@ impl InstancePointHit {
         match (a, b) {
             (None, None) => true,
             (Some(x), Some(y)) => {
-                x.instance == y.instance && crate::PointHit::agree(Some(one(x)), Some(one(y)))
+                x.instance == y.instance && rt_core::PointHit::agree(Some(one(x)), Some(one(y)))
             }
             _ => false,
         }
@@ -583,7 +587,7 @@ impl InstancePointHit {
 /// shrinks as instances offer primitives, and the best answer so far. Ties go to the smaller
 /// instance index, then the smaller primitive index.
 ///
-/// The pruning radius is widened as [`ClosestPointQuery`](crate::ClosestPointQuery)'s is, with
+/// The pruning radius is widened as [`ClosestPointQuery`](rt_core::ClosestPointQuery)'s is, with
 /// the rounding margin scaled by the scene's largest condition number.
 #[derive(Clone, Copy, Debug)]
 pub struct InstancePointQuery {
@@ -897,3 +901,8 @@ impl<P: Primitive> TwoLevel<P> for LinearInstances<P> {
             + bottom_bytes(&self.instances)
     }
 }
+
+/// The README's example, compiled and run as a doctest so that it stays true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

@@ -1,14 +1,16 @@
 //! The few parallel patterns the builders use, on rayon's threads with the feature `parallel`,
 //! and in order on the calling thread without it.
 //!
-//! Every structure crate has a default-on `parallel` feature that turns on this crate's. A
-//! program that leaves it off (`default-features = false`) compiles no thread pool (rayon and
+//! rt-core re-exports this crate as `rt_core::par`. Every structure crate has a default-on
+//! `parallel` feature that turns on this crate's. A program that leaves it off (`default-features = false`) compiles no thread pool (rayon and
 //! the five crates under it) and builds single-threaded; targets without threads, such as
 //! `wasm32-unknown-unknown`, build either way.
 //!
 //! Each function returns the same values in the same order whether it runs in parallel or not,
 //! so a structure built with or without the feature, on any number of threads, is the same
 //! structure: the builders' determinism tests compare them byte for byte.
+
+#![warn(missing_docs)]
 
 use std::ops::Range;
 
@@ -271,3 +273,8 @@ mod tests {
         assert!(threads() >= 1);
     }
 }
+
+/// The README's example, compiled and run as a doctest so that it stays true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

@@ -1,4 +1,5 @@
-//! Saved structures: the file framing every structure's `save` and `load` share.
+//! Saved structures: the [`Persist`] trait every structure crate implements, and the file
+//! framing every structure's `save` and `load` share.
 //!
 //! A built structure is a few plain arrays (nodes, references, primitives) and a few numbers.
 //! Saving writes them as they are, so loading is reading them back; what loading must add is
@@ -26,6 +27,8 @@
 //! Then one 32-byte entry per section (a tag of 8 ASCII bytes, zero-padded; the offset from the
 //! file's start and the length in bytes, each a `u64`; the size of one element, a `u32`; a zero
 //! `u32`), then the sections' bytes, each starting at a multiple of 16.
+
+#![warn(missing_docs)]
 
 use bytemuck::Pod;
 use std::fmt;
@@ -77,7 +80,7 @@ pub enum LoadError {
     /// The checksum does not match: the bytes changed after they were written.
     Checksum,
     /// The framing is sound, but the structure it holds breaks an invariant.
-    Invalid(crate::ValidationError),
+    Invalid(rt_core::ValidationError),
     /// [`LoadError`] from a file, naming it.
     InFile {
         /// The file.
@@ -117,28 +120,28 @@ impl fmt::Display for LoadError {
 
 impl std::error::Error for LoadError {}
 
-impl From<crate::ValidationError> for LoadError {
-    fn from(e: crate::ValidationError) -> Self {
+impl From<rt_core::ValidationError> for LoadError {
+    fn from(e: rt_core::ValidationError) -> Self {
         LoadError::Invalid(e)
     }
 }
 
 /// A primitive type a structure can be saved over: plain old data, with a name the file
 /// records so that a file over other primitives is refused.
-pub trait SavedPrimitive: crate::Primitive + Pod {
+pub trait SavedPrimitive: rt_core::Primitive + Pod {
     /// The name recorded in the file (at most 32 ASCII bytes).
     const NAME: &'static str;
 }
 
-impl SavedPrimitive for crate::Triangle {
+impl SavedPrimitive for rt_core::Triangle {
     const NAME: &'static str = "Triangle";
 }
 
-impl SavedPrimitive for crate::MtTriangle {
+impl SavedPrimitive for rt_core::MtTriangle {
     const NAME: &'static str = "MtTriangle";
 }
 
-impl SavedPrimitive for crate::Sphere {
+impl SavedPrimitive for rt_core::Sphere {
     const NAME: &'static str = "Sphere";
 }
 
@@ -585,7 +588,7 @@ impl<'a> Reader<'a> {
         // and 0.27 s more to copy into the tree's arrays; read straight into them, a block per
         // task on two threads with each block's checksum taken while it is in cache, 0.19 s
         // (`cargo bench -p rt-benches --bench saved`).
-        let blocks = crate::par::map_chunks_mut_indexed(out, BLOCK, |k, block| {
+        let blocks = rt_core::par::map_chunks_mut_indexed(out, BLOCK, |k, block| {
             let at = e.at + k * BLOCK;
             match &self.source {
                 Source::Bytes(bytes) => block.copy_from_slice(&bytes[at..at + block.len()]),
@@ -709,8 +712,8 @@ fn read_at(file: &std::fs::File, out: &mut [u8], at: u64) -> std::io::Result<()>
 /// chosen again on load.
 ///
 /// ```
-/// use rt_core::persist::Persist;
-/// # fn demo<A: Persist>(built: &A) -> Result<(), rt_core::persist::LoadError> {
+/// use rt_persist::Persist;
+/// # fn demo<A: Persist>(built: &A) -> Result<(), rt_persist::LoadError> {
 /// let bytes = built.save();
 /// let loaded = A::load(&bytes)?;
 /// # let _ = loaded; Ok(()) }
@@ -796,27 +799,24 @@ pub trait Persist: Sized {
 /// The reference saves its valid primitives and their input indices (sections `prims` and
 /// `ids`); loading checks that every primitive is valid and the indices strictly increase, and
 /// computes the box again.
-impl<P: SavedPrimitive> Persist for crate::BruteForce<P> {
+impl<P: SavedPrimitive> Persist for rt_core::BruteForce<P> {
     const KIND: &'static str = "rt-core::BruteForce";
     const LAYOUT: u32 = 1;
     type Saved = P;
 
     fn write_sections<'a>(&'a self, w: &mut Writer<'a>) {
-        w.section("prims", &self.prims);
-        w.section("ids", &self.ids);
+        w.section("prims", self.prims());
+        w.section("ids", self.ids());
     }
 
     fn read_sections(r: &Reader<'_>) -> Result<Self, LoadError> {
         let (prims, ids): (Vec<P>, Vec<u32>) = (r.section("prims")?, r.section("ids")?);
-        let bounds = prims
-            .iter()
-            .fold(crate::Aabb::EMPTY, |b, p: &P| b.union(p.bounds()));
-        Ok(Self { prims, ids, bounds })
+        Ok(Self::from_parts(prims, ids))
     }
 
     fn check_loaded(&self) -> Result<(), LoadError> {
-        let invalid = |m: String| Err(LoadError::Invalid(crate::ValidationError::new(m)));
-        let (prims, ids) = (&self.prims, &self.ids);
+        let invalid = |m: String| Err(LoadError::Invalid(rt_core::ValidationError::new(m)));
+        let (prims, ids) = (self.prims(), self.ids());
         if prims.len() != ids.len() {
             return invalid(format!("{} primitives but {} ids", prims.len(), ids.len()));
         }
@@ -864,7 +864,7 @@ pub fn to_bool(value: u32, what: &str) -> Result<bool, LoadError> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Accel, Sphere, Triangle};
+    use rt_core::{Accel, Sphere, Triangle};
 
     fn sample() -> Vec<u8> {
         let mut w = Writer::new::<Triangle>("test::Thing", 3);
@@ -993,7 +993,7 @@ mod tests {
     #[test]
     fn random_damage_never_panics() {
         let bytes = sample();
-        let mut rng = crate::Rng::new(5);
+        let mut rng = rt_core::Rng::new(5);
         for round in 0..20_000 {
             let mut b = bytes.clone();
             for _ in 0..1 + rng.below(4) {
@@ -1078,14 +1078,14 @@ mod tests {
     /// `load_file` names the file in every error; a missing file is an I/O error.
     #[test]
     fn load_file_names_the_file() {
-        type Brute = crate::BruteForce<Triangle>;
+        type Brute = rt_core::BruteForce<Triangle>;
         let missing = scratch("missing");
         let e = Brute::load_file(&missing).unwrap_err();
         assert!(matches!(e, LoadError::Io { .. }), "{e}");
         assert!(e.to_string().contains("missing"), "{e}");
         let path = scratch("sphere-brute");
-        let spheres = [crate::Sphere::new(crate::glam::Vec3::ZERO, 1.0)];
-        crate::BruteForce::build(&spheres, &())
+        let spheres = [rt_core::Sphere::new(rt_core::glam::Vec3::ZERO, 1.0)];
+        rt_core::BruteForce::build(&spheres, &())
             .save_file(&path)
             .unwrap();
         let e = Brute::load_file(&path).unwrap_err();
@@ -1097,11 +1097,16 @@ mod tests {
             e.to_string().starts_with(&path.display().to_string()),
             "{e}"
         );
-        let loaded = crate::BruteForce::<crate::Sphere>::load_file(&path).unwrap();
+        let loaded = rt_core::BruteForce::<rt_core::Sphere>::load_file(&path).unwrap();
         assert_eq!(
             loaded.save(),
-            crate::BruteForce::build(&spheres, &()).save()
+            rt_core::BruteForce::build(&spheres, &()).save()
         );
         let _ = std::fs::remove_file(&path);
     }
 }
+
+/// The README's example, compiled and run as a doctest so that it stays true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

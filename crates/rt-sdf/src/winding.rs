@@ -1,4 +1,4 @@
-//! Inside, outside and signed distance: the generalised winding number.
+//! Inside and outside: the generalised winding number.
 //!
 //! # The winding number
 //! The winding number of a closed surface around a point counts how many times the surface
@@ -8,7 +8,7 @@
 //! winding numbers", SIGGRAPH 2013) take the same sum over a mesh that is not closed: with a
 //! hole or a crack, it still comes out near 1 deep inside and near 0 far outside, and changes
 //! smoothly across the hole instead of flipping, so "inside when above ½" is a robust test
-//! where counting the crossings of one ray ([`Accel::inside_by_parity`]) depends on whether
+//! where counting the crossings of one ray ([`SignedDistance::inside_by_parity`](crate::SignedDistance::inside_by_parity)) depends on whether
 //! that ray happens to leave through the hole.
 //!
 //! # The fast evaluation and its error bound
@@ -42,39 +42,9 @@
 //! computed exact sum and the computed fast one differ from the true values by about
 //! `1e-16 ×` the number of triangles, and the tests allow `1e-9`.
 //!
-//! # Signed distance
-//! [`Accel::signed_distance`] is the distance of [`Accel::closest_point`] with the sign of
-//! [`WindingTree::is_inside`]: negative inside. The distance comes from the structure and is
-//! exactly brute force's; the sign comes from the winding number, which is the same for every
-//! structure.
-//!
-//! ```
-//! use rt_core::{Accel, BruteForce, Triangle, WindingTree, glam::Vec3};
-//! // A tetrahedron with its faces turned outwards.
-//! let p = [Vec3::ZERO, Vec3::X, Vec3::Y, Vec3::Z];
-//! let tris = [
-//!     Triangle::new(p[0], p[2], p[1]),
-//!     Triangle::new(p[0], p[1], p[3]),
-//!     Triangle::new(p[0], p[3], p[2]),
-//!     Triangle::new(p[1], p[2], p[3]),
-//! ];
-//! let accel = BruteForce::build(&tris, &());
-//! let sign = WindingTree::build(&tris).unwrap();
-//! let inside = Vec3::splat(0.1);
-//! assert!((sign.winding_number(inside, 0.0).value - 1.0).abs() < 1e-12);
-//! let sd = accel.signed_distance(&sign, inside, f32::INFINITY).unwrap();
-//! assert_eq!(sd.distance, -0.1);
-//! let outside = accel.signed_distance(&sign, Vec3::new(0.0, 0.0, -2.0), f32::INFINITY).unwrap();
-//! assert_eq!(outside.distance, 2.0);
-//! ```
-//!
-//! [`Accel::inside_by_parity`]: crate::Accel::inside_by_parity
-//! [`Accel::signed_distance`]: crate::Accel::signed_distance
-//! [`Accel::closest_point`]: crate::Accel::closest_point
-
-use crate::{PointHit, Primitive};
 use bytemuck::Zeroable;
 use glam::{DVec3, Vec3};
+use rt_core::Primitive;
 use std::f64::consts::PI;
 
 /// The signed solid angle the triangle `(v0, v1, v2)` subtends at `p`, in steradians, in
@@ -86,7 +56,8 @@ use std::f64::consts::PI;
 /// winding number jumps by 1 across the surface, and on it either side is an answer).
 ///
 /// ```
-/// use rt_core::{solid_angle, glam::Vec3};
+/// use rt_core::glam::Vec3;
+/// use rt_sdf::solid_angle;
 /// // One face of a cube seen from its centre: a sixth of the sphere.
 /// let o = Vec3::splat(0.5);
 /// let w = solid_angle(Vec3::ZERO, Vec3::Y, Vec3::X, o) + solid_angle(Vec3::X, Vec3::Y, Vec3::new(1.0, 1.0, 0.0), o);
@@ -195,35 +166,7 @@ pub struct Winding {
     pub error_bound: f64,
 }
 
-/// The answer to a signed-distance query ([`Accel::signed_distance`](crate::Accel)).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct SignedPoint {
-    /// The closest point: exactly [`Accel::closest_point`](crate::Accel::closest_point)'s
-    /// answer.
-    pub near: PointHit,
-    /// Whether the query point is inside ([`WindingTree::is_inside`]).
-    pub inside: bool,
-    /// `near.distance`, negative when inside.
-    pub distance: f32,
-}
-
-impl SignedPoint {
-    /// The closest point `near`, signed: its distance negated when `inside`.
-    pub fn signed(near: PointHit, inside: bool) -> Self {
-        let distance = if inside {
-            -near.distance
-        } else {
-            near.distance
-        };
-        Self {
-            near,
-            inside,
-            distance,
-        }
-    }
-}
-
-crate::pod_struct! {
+rt_core::pod_struct! {
 /// The tree of clusters [`WindingTree`] keeps: one cluster of triangles, the coefficients of
 /// its expansion, and where its triangles or children are.
 ///
@@ -547,7 +490,7 @@ fn build_node(nodes: &mut Vec<Cluster>, tris: &mut [[Vec3; 3]], first: usize) ->
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::{Rng, Triangle};
+    use rt_core::{Rng, Triangle};
 
     /// A closed UV sphere of radius `r` around `c`, faces outwards.
     fn sphere(c: Vec3, r: f32, rings: usize, segments: usize) -> Vec<Triangle> {
@@ -695,7 +638,7 @@ mod tests {
         assert!(!tree.is_inside(Vec3::new(f32::INFINITY, 0.0, 0.0)));
         let empty = WindingTree::build::<Triangle>(&[]).unwrap();
         assert_eq!(empty.winding_number(Vec3::ONE, 0.0).value, 0.0);
-        let spheres = [crate::Sphere::new(Vec3::ZERO, 1.0)];
+        let spheres = [rt_core::Sphere::new(Vec3::ZERO, 1.0)];
         assert_eq!(
             WindingTree::build(&spheres).unwrap_err(),
             NotATriangle { prim: 0 }

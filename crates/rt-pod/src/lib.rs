@@ -1,10 +1,15 @@
 //! Plain-old-data structs without a derive macro: [`pod_struct!`](crate::pod_struct), the
-//! field trait it checks with, and the one cast of flat `f32` buffers to `Vec3`s.
+//! field trait it checks with, and the one cast of flat `f32` buffers to `Vec3`s. rt-core
+//! re-exports the macro (`rt_core::pod_struct!`) and bytemuck.
 //!
-//! This is one of the few modules with `unsafe` code (each block says why it is sound): bytemuck's
+//! This is one of the few places with `unsafe` code (each block says why it is sound): bytemuck's
 //! own route to these impls is a procedural macro, which every user of a structure would compile,
 //! and glam's `bytemuck` feature enables that macro too.
 #![allow(unsafe_code)]
+#![warn(missing_docs)]
+
+/// Re-exported so that [`pod_struct!`]'s expansion names the bytemuck this crate implements.
+pub use bytemuck;
 
 use glam::Vec3;
 
@@ -16,7 +21,6 @@ use glam::Vec3;
 /// Implement it only for `Copy + 'static` types with no padding bytes, no pointers, and no
 /// invalid bit patterns (the conditions of [`bytemuck::Pod`]). Only this module and the macro
 /// do.
-#[doc(hidden)]
 pub unsafe trait PodField: Copy + 'static {}
 
 macro_rules! pod_fields {
@@ -40,7 +44,7 @@ const _: () = assert!(size_of::<Vec3>() == 12 && align_of::<Vec3>() == align_of:
 unsafe impl PodField for Vec3 {}
 
 /// The flat buffer `x0 y0 z0 x1 y1 z1 …` as `Vec3`s; a trailing partial vertex is left out.
-pub(crate) fn vec3s(flat: &[f32]) -> &[Vec3] {
+pub fn vec3s(flat: &[f32]) -> &[Vec3] {
     // SAFETY: `Vec3` is three `f32`s with the alignment of `f32` and no padding (asserted above),
     // so the pointer of an `f32` slice is aligned for `Vec3`, each run of three `f32`s is a valid
     // `Vec3`, and `len / 3` of them lie within the slice, for the slice's lifetime.
@@ -70,27 +74,27 @@ pub(crate) fn vec3s(flat: &[f32]) -> &[Vec3] {
 /// A struct that breaks a rule does not compile:
 ///
 /// ```compile_fail
-/// rt_core::pod_struct! {
+/// rt_pod::pod_struct! {
 ///     #[derive(Clone, Copy)]
 ///     pub struct Padded { pub flag: u8, pub count: u32 } // three bytes of padding after `flag`
 /// }
 /// ```
 ///
 /// ```compile_fail
-/// rt_core::pod_struct! {
+/// rt_pod::pod_struct! {
 ///     #[derive(Clone, Copy)]
 ///     pub struct Flagged { pub flag: bool, pub more: [bool; 3] } // a `bool` is not `Pod`
 /// }
 /// ```
 ///
 /// ```
-/// rt_core::pod_struct! {
+/// rt_pod::pod_struct! {
 ///     /// Two counts, eight bytes.
 ///     #[derive(Clone, Copy, Debug, PartialEq)]
 ///     pub struct Counts { pub first: u32, pub count: u32 }
 /// }
 /// let counts = [Counts { first: 1, count: 2 }];
-/// let bytes: &[u8] = rt_core::bytemuck::cast_slice(&counts);
+/// let bytes: &[u8] = rt_pod::bytemuck::cast_slice(&counts);
 /// assert_eq!(bytes.len(), 8);
 /// ```
 #[macro_export]
@@ -119,7 +123,7 @@ macro_rules! pod_struct {
     };
     (@impl $name:ident; $($field_ty:ty),*) => {
         const _: () = {
-            const fn field_is_pod<T: $crate::__PodField>() {}
+            const fn field_is_pod<T: $crate::PodField>() {}
             $(field_is_pod::<$field_ty>();)*
             assert!(
                 ::core::mem::size_of::<$name>() == 0 $(+ ::core::mem::size_of::<$field_ty>())*,
@@ -127,7 +131,7 @@ macro_rules! pod_struct {
             );
         };
         // SAFETY: the struct is `repr(C)` (the macro adds the attribute), not generic (the
-        // macro's grammar takes no parameters), every field is plain old data (`__PodField`)
+        // macro's grammar takes no parameters), every field is plain old data (`PodField`)
         // and the fields' sizes add
         // up to the struct's size, so there is no padding: both are checked at compile time just
         // above. Those are the conditions bytemuck's documentation sets for `Pod` (and its
@@ -139,6 +143,11 @@ macro_rules! pod_struct {
         unsafe impl $crate::bytemuck::Pod for $name {}
         // SAFETY: as for `Zeroable` just above: `Pod` is exactly what the field trait asks for.
         #[allow(unsafe_code)]
-        unsafe impl $crate::__PodField for $name {}
+        unsafe impl $crate::PodField for $name {}
     };
 }
+
+/// The README's example, compiled and run as a doctest so that it stays true.
+#[cfg(doctest)]
+#[doc = include_str!("../README.md")]
+struct ReadmeDoctests;

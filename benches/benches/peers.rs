@@ -1,6 +1,7 @@
 //! rt-bvh's presets against Embree 3 on the same triangles and the same rays, in one run:
 //! primary, incoherent and shadow (any-hit) rays traced on one thread, and builds on one thread
-//! and on all threads, over the bunny, the teapot, the sphereflake and the teapot in a stadium.
+//! and on all threads, over every built-in scene and every shared mesh (`--scenes peers`: the
+//! bunny, the teapot, the sphereflake and the teapot in a stadium; or a list of names).
 //! It prints the measurements and the ratio table (rt-bvh's default preset ÷ Embree, per scene
 //! and ray kind, with geometric means), so nobody divides by hand, and a table of rt-bvh's ray
 //! bundles against its single rays and Embree's coherent paths (16- and 8-ray packets, 64-ray
@@ -11,19 +12,20 @@
 //! ```sh
 //! cargo bench -p rt-benches --features embree --bench peers            # with Embree
 //! cargo bench -p rt-benches --bench peers                              # rt-bvh's presets only
-//! cargo bench -p rt-benches --features embree --bench peers -- --passes 3 --scenes bunny --json out.json
+//! cargo bench -p rt-benches --features embree --bench peers -- --passes 3 --scenes peers --json out.json
 //! ```
 //!
 //! Method: every contender traces every ray set `--passes` times (5 by default), the passes of
 //! all contenders interleaved (A B C A B C ...) so that drift in the machine's speed affects all
 //! alike, after one untimed warm-up pass each; the median pass is reported. Builds likewise.
 //! Embree uses its default scene flags and build quality `medium` (its default; the ratios divide
-//! by it), with `high` (spatial splits) shown beside it. Answers are checked: all rt-bvh presets
+//! by it), with `high` (spatial splits) and `robust` (medium with `RTC_SCENE_FLAG_ROBUST`, the
+//! mode Open3D ships and the one whose guarantee is closest to the watertight test's) beside it. Answers are checked: all rt-bvh presets
 //! must agree exactly (the run panics otherwise), and the rays on which Embree's answer differs
 //! from rt-bvh's are counted (Embree's triangle test is not watertight and breaks ties its own
 //! way, so a few edge rays differ).
 
-use rt_benches::{BenchScene, peer_scenes};
+use rt_benches::{BenchScene, geomean, median};
 use rt_bvh::{Bvh, BvhParams};
 use rt_core::{Accel, Hit, MtTriangle, Ray, Triangle};
 use rt_scene::raygen::RayKind;
@@ -104,50 +106,7 @@ fn embree_tracer(name: &str, scene: rt_benches::embree::EmbreeScene) -> Tracer {
 /// One timed contender: runs one pass (a build or a trace) and drops the result.
 type BuildFn<'a> = Box<dyn Fn() + 'a>;
 
-struct Options {
-    passes: usize,
-    width: u32,
-    height: u32,
-    scenes: Vec<String>,
-    json: Option<String>,
-}
-
-fn options() -> Options {
-    let mut o = Options {
-        passes: 5,
-        width: 1024,
-        height: 768,
-        scenes: Vec::new(),
-        json: None,
-    };
-    for (flag, value) in rt_benches::flag_values() {
-        let number = |what: &str| -> u32 { value.parse().unwrap_or_else(|_| panic!("{what} N")) };
-        match flag.as_str() {
-            "--passes" => o.passes = number("--passes") as usize,
-            "--width" => o.width = number("--width"),
-            "--height" => o.height = number("--height"),
-            "--scenes" => o.scenes = value.split(',').map(str::to_string).collect(),
-            "--json" => o.json = Some(value),
-            _ => panic!("unknown flag {flag}"),
-        }
-    }
-    o.passes = o.passes.max(1);
-    o
-}
-
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
-    let n = v.len();
-    if n % 2 == 1 {
-        v[n / 2]
-    } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
-    }
-}
-
-fn geomean(v: &[f64]) -> f64 {
-    (v.iter().map(|x| x.ln()).sum::<f64>() / v.len() as f64).exp()
-}
+type Options = rt_benches::RunOptions;
 
 /// Times each closure `passes` times, interleaved, after one untimed warm-up; medians in ms.
 fn time_interleaved(fs: &[BuildFn<'_>], passes: usize) -> Vec<f64> {
@@ -288,11 +247,11 @@ fn bench_builds(scene: &BenchScene, passes: usize) -> BuildResult {
             {
                 use rt_benches::embree::{EmbreeScene, Quality};
                 let device = EmbreeScene::device((*threads == 1).then_some(1)).expect("a device");
-                for (quality, qname) in [(Quality::Medium, "medium"), (Quality::High, "high")] {
+                for quality in Quality::ALL {
                     let ms = block(&mut || {
                         drop(EmbreeScene::build(&device, tris, quality).expect("Embree build"));
                     });
-                    record(format!("embree {qname}"), *threads, pass, ms);
+                    record(format!("embree {}", quality.name()), *threads, pass, ms);
                 }
             }
         }
@@ -343,12 +302,9 @@ fn tracers(scene: &BenchScene) -> Vec<Tracer> {
     {
         use rt_benches::embree::{EmbreeScene, Quality};
         let device = EmbreeScene::device(Some(1)).expect("an Embree device");
-        for (quality, name) in [
-            (Quality::Medium, "embree medium"),
-            (Quality::High, "embree high"),
-        ] {
+        for quality in Quality::ALL {
             let s = EmbreeScene::build(&device, &scene.triangles, quality).expect("Embree build");
-            out.push(embree_tracer(name, s));
+            out.push(embree_tracer(&format!("embree {}", quality.name()), s));
         }
     }
     out
@@ -436,7 +392,9 @@ fn views(scene: &BenchScene, o: &Options) -> [(&'static str, rt_scene::Camera); 
 }
 
 /// rt-bvh's bundles against its single rays and against Embree's packets, on primary rays in
-/// 8×8 pixel tiles and on the shadow rays of their hits in the same order. Every bundle answer
+/// 8×8 pixel tiles and on the shadow rays of their hits in the same order, and (on the filled
+/// view) on primary rays in image order, a row of pixels after another, and their shadow rays
+/// in that order. Every bundle answer
 /// must equal the single answer bit for bit (the run panics otherwise); each of Embree's
 /// coherent paths must give its single rays' primitive (or any-hit answer) on all but 0.1% of
 /// the rays (the run panics otherwise: a few edge rays may round differently in its packet
@@ -450,13 +408,26 @@ fn bench_bundles(scene: &BenchScene, o: &Options, out: &mut Vec<BundleResult>) {
         let e = EmbreeScene::build(&device, &scene.triangles, Quality::Medium).expect("Embree");
         (device, e)
     };
-    for (view, camera) in views(scene, o) {
-        let (primary, _) = camera.tiled_rays(o.width, o.height, (8, 8));
+    let light = rt_scene::raygen::default_light(&scene.bounds());
+    // Primary rays and the shadow rays of their hits, in the primary rays' order.
+    let with_shadows = |primary: Vec<Ray>| {
         let hits: Vec<Option<Hit>> = primary.iter().map(|r| bvh.intersect(r)).collect();
-        let light = rt_scene::raygen::default_light(&scene.bounds());
         let shadow = rt_scene::raygen::shadow_rays(&primary, &hits, &scene.triangles, light);
-        for (kind, rays) in [("primary", &primary), ("shadow", &shadow)] {
-            let any = kind == "shadow";
+        (primary, shadow)
+    };
+    for (view, camera) in views(scene, o) {
+        let (tiled, _) = camera.tiled_rays(o.width, o.height, (8, 8));
+        let (primary, shadow) = with_shadows(tiled);
+        let mut sets = vec![("primary", primary), ("shadow", shadow)];
+        // As many renderers make them: a row of pixels after another, and the shadow rays of
+        // their hits in the same order, handed over as they come.
+        if view == "filled" {
+            let (primary, shadow) = with_shadows(camera.primary_rays(o.width, o.height));
+            sets.extend([("primary, rows", primary), ("shadow, rows", shadow)]);
+        }
+        for (kind, rays) in &sets {
+            let (kind, rays) = (*kind, rays);
+            let any = kind.starts_with("shadow");
             let mut single = vec![None; rays.len()];
             let mut bundled = vec![None; rays.len()];
             let (mut blocked, mut blocked_b) = (vec![false; rays.len()], vec![false; rays.len()]);
@@ -628,10 +599,13 @@ fn bundle_report(results: &[BundleResult]) -> String {
     let names: Vec<&str> = first.mrays.iter().map(|(n, _)| *n).collect();
     let _ = writeln!(
         s,
-        "\nBundles: primary rays in 8×8 pixel tiles and their shadow rays in the same order, \
-         single-threaded. Embree's coherent paths, each with the coherent flag: packets of 16 \
-         consecutive rays (8×2 pixels), packets of 8 (one pixel row of a tile), and streams of 64 \
-         (a tile, `rtcIntersect1M` / `rtcOccluded1M`, which Embree gathers into packets itself). \
+        "\nBundles: primary rays in 8×8 pixel tiles and their shadow rays in the same order \
+         (`primary`, `shadow`), and on the filled view primary rays in image order, a row of \
+         pixels after another, and their shadow rays in that order (`primary, rows`, `shadow, \
+         rows`); single-threaded. rt-bvh's bundles take 64 consecutive rays. Embree's coherent \
+         paths, each with the coherent flag, on the same rays in the same order: packets of 16 \
+         consecutive rays (8×2 pixels of a tile), packets of 8, and streams of 64 \
+         (`rtcIntersect1M` / `rtcOccluded1M`, which Embree gathers into packets itself). \
          Mrays/s; bundles ÷ single rays, and bundles ÷ the fastest of Embree's coherent paths on \
          that row\n"
     );
@@ -814,6 +788,30 @@ fn report(names: &[String], traces: &[TraceResult], builds: &[BuildResult], o: &
         sets.map(|set| format!("**{:.2}**", gm(0, set))).join(" | "),
         build_gm
     );
+    // The default preset against every Embree configuration: the geometric mean over the
+    // scenes, with the lowest scene beside it.
+    let _ = writeln!(
+        s,
+        "\n{} ÷ each Embree configuration: geometric mean over the scenes (lowest scene)\n",
+        names[0]
+    );
+    let _ = writeln!(s, "| {} ÷ | {} |", names[0], sets.join(" | "));
+    let _ = writeln!(s, "| --- |{}", " ---: |".repeat(sets.len()));
+    for (e, embree) in names.iter().enumerate() {
+        if !embree.starts_with("embree ") {
+            continue;
+        }
+        let cells = sets.map(|set| {
+            let v: Vec<f64> = traces
+                .iter()
+                .filter(|r| r.set == set)
+                .map(|r| r.mrays[0] / r.mrays[e])
+                .collect();
+            let low = v.iter().copied().fold(f64::INFINITY, f64::min);
+            format!("{:.2} ({low:.2})", geomean(&v))
+        });
+        let _ = writeln!(s, "| {embree} | {} |", cells.join(" | "));
+    }
     let _ = writeln!(
         s,
         "\nGeometric means over the scenes, each contender ÷ Embree medium\n"
@@ -865,11 +863,8 @@ fn to_json(
 }
 
 fn main() {
-    let o = options();
-    let scenes: Vec<BenchScene> = peer_scenes()
-        .into_iter()
-        .filter(|s| o.scenes.is_empty() || o.scenes.iter().any(|n| n == s.name))
-        .collect();
+    let o = Options::from_args();
+    let scenes: Vec<BenchScene> = o.scenes();
     let mut traces = Vec::new();
     let mut builds = Vec::new();
     let mut bundles = Vec::new();

@@ -96,6 +96,7 @@ fn bench_build(c: &mut Criterion, scene: &BenchScene) {
     // timed single-threaded unless a row says parallel.
     for (preset, params) in [
         ("sah", KdParams::sah()),
+        ("fewest-tests", KdParams::fewest_tests()),
         ("wald-havran", KdParams::wald_havran()),
         ("noclip", KdParams::noclip()),
         ("pbrt", KdParams::pbrt()),
@@ -176,6 +177,7 @@ fn bench_trace(c: &mut Criterion, scene: &BenchScene) {
     });
     for (label, params) in [
         ("rt-kdtree/stack", KdParams::sah()),
+        ("rt-kdtree/fewest-tests", KdParams::fewest_tests()),
         ("rt-kdtree/wald-havran", KdParams::wald_havran()),
         ("rt-kdtree/restart", KdParams::restart()),
     ] {

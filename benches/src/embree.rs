@@ -11,13 +11,32 @@ use rt_core::glam::Vec3;
 use rt_core::{Hit, Ray, Triangle};
 use std::ffi::CString;
 
-/// Embree's build quality (`rtcSetSceneBuildQuality`).
+/// How Embree builds a scene: its build quality (`rtcSetSceneBuildQuality`) and scene flags
+/// (`rtcSetSceneFlags`).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Quality {
-    /// Embree's default: binned SAH, no spatial splits.
+    /// Embree's default: build quality medium (binned SAH, no spatial splits), no scene flags.
     Medium,
-    /// SAH with spatial splits: slower builds, faster traversal.
+    /// Build quality high (SAH with spatial splits): slower builds, faster traversal.
     High,
+    /// Build quality medium with `RTC_SCENE_FLAG_ROBUST`: Embree's robust mode, which avoids
+    /// the optimizations that may miss a hit on an edge (what Open3D's `RaycastingScene`
+    /// ships): the Embree mode whose guarantee is closest to the watertight test's.
+    Robust,
+}
+
+impl Quality {
+    /// Every configuration, the default first.
+    pub const ALL: [Quality; 3] = [Quality::Medium, Quality::High, Quality::Robust];
+
+    /// The name the benchmarks print: `medium`, `high` or `robust`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Quality::Medium => "medium",
+            Quality::High => "high",
+            Quality::Robust => "robust",
+        }
+    }
 }
 
 /// An Embree device with one committed triangle scene.
@@ -53,7 +72,7 @@ impl EmbreeScene {
     }
 
     /// Builds a scene of the triangles on `device` (one geometry, triangle `i` is Embree's
-    /// `primID` `i`), with the default scene flags and the given quality.
+    /// `primID` `i`), with the build quality and scene flags of `quality`.
     ///
     /// # Errors
     /// Any error Embree reports while building.
@@ -108,10 +127,13 @@ impl EmbreeScene {
             sys::rtcSetSceneBuildQuality(
                 scene,
                 match quality {
-                    Quality::Medium => sys::RTCBuildQuality::MEDIUM,
+                    Quality::Medium | Quality::Robust => sys::RTCBuildQuality::MEDIUM,
                     Quality::High => sys::RTCBuildQuality::HIGH,
                 },
             );
+            if quality == Quality::Robust {
+                sys::rtcSetSceneFlags(scene, sys::RTCSceneFlags::ROBUST);
+            }
             sys::rtcAttachGeometry(scene, geometry);
             // The scene holds its own reference to the geometry.
             sys::rtcReleaseGeometry(geometry);

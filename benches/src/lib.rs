@@ -110,6 +110,131 @@ pub fn peer_scenes() -> Vec<BenchScene> {
     out
 }
 
+/// Every built-in scene and, when `../shared/meshes` is present, every mesh there (its `.obj`
+/// files): what the kernel table and the peers benchmark measure by default, so that
+/// no figure rests on the scenes a kernel was tuned on. A shared mesh's name is its file
+/// name (`teapot.obj`, beside the built-in `teapot`).
+///
+/// # Panics
+/// If the shared meshes are missing under `CI=true`, or a mesh does not load.
+pub fn every_scene() -> Vec<BenchScene> {
+    let mut out: Vec<BenchScene> = scenes::BUILTIN_SCENES
+        .iter()
+        .map(|s| builtin(s.name))
+        .collect();
+    let Some(dir) = shared_meshes_dir() else {
+        return out;
+    };
+    let mut files: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|f| f.ends_with(".obj"))
+        .collect();
+    files.sort();
+    for file in files {
+        // A benchmark names its scenes for the whole run: the few names are leaked once.
+        let name: &'static str = Box::leak(file.as_str().into());
+        out.extend(shared(name, &file));
+    }
+    out
+}
+
+/// The scenes named by `--scenes` (`all` or nothing: [`every_scene`]; `peers`:
+/// [`peer_scenes`]; else a comma-separated list of names from [`every_scene`]).
+///
+/// # Panics
+/// If a name is none of those scenes.
+pub fn chosen_scenes(list: Option<&str>) -> Vec<BenchScene> {
+    match list {
+        None | Some("all") => every_scene(),
+        Some("peers") => peer_scenes(),
+        Some(list) => {
+            let names: Vec<&str> = list.split(',').collect();
+            let all = every_scene();
+            for n in &names {
+                assert!(
+                    all.iter().any(|s| s.name == *n),
+                    "no scene {n}: the scenes are {}",
+                    all.iter().map(|s| s.name).collect::<Vec<_>>().join(", ")
+                );
+            }
+            all.into_iter()
+                .filter(|s| names.contains(&s.name))
+                .collect()
+        }
+    }
+}
+
+/// The flags of the benchmarks with their own harness that trace scenes (`peers`, `kernels`):
+/// `--passes N` (5), `--width W` and `--height H` (1024×768), `--scenes LIST` (see
+/// [`chosen_scenes`]) and `--json FILE`.
+#[derive(Debug)]
+pub struct RunOptions {
+    /// Timed passes per contender (at least 1).
+    pub passes: usize,
+    /// Image width of the camera rays.
+    pub width: u32,
+    /// Image height of the camera rays.
+    pub height: u32,
+    /// `--scenes`: every scene when absent.
+    pub scenes: Option<String>,
+    /// Where to write the results as JSON.
+    pub json: Option<String>,
+}
+
+impl RunOptions {
+    /// The flags on the command line.
+    ///
+    /// # Panics
+    /// On an unknown flag or a value that is not a number where one is needed.
+    pub fn from_args() -> Self {
+        let mut o = Self {
+            passes: 5,
+            width: 1024,
+            height: 768,
+            scenes: None,
+            json: None,
+        };
+        for (flag, value) in flag_values() {
+            let number =
+                |what: &str| -> u32 { value.parse().unwrap_or_else(|_| panic!("{what} N")) };
+            match flag.as_str() {
+                "--passes" => o.passes = number("--passes").max(1) as usize,
+                "--width" => o.width = number("--width"),
+                "--height" => o.height = number("--height"),
+                "--scenes" => o.scenes = Some(value),
+                "--json" => o.json = Some(value),
+                _ => panic!("unknown flag {flag}"),
+            }
+        }
+        o
+    }
+
+    /// The scenes `--scenes` names ([`chosen_scenes`]).
+    pub fn scenes(&self) -> Vec<BenchScene> {
+        chosen_scenes(self.scenes.as_deref())
+    }
+}
+
+/// The median of `v` (the mean of the two middle values of an even count).
+///
+/// # Panics
+/// If `v` is empty.
+pub fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// The geometric mean of `v`: how the benchmarks average ratios.
+pub fn geomean(v: &[f64]) -> f64 {
+    (v.iter().map(|x| x.ln()).sum::<f64>() / v.len() as f64).exp()
+}
+
 /// The `--name value` pairs on the command line of a benchmark with its own harness, in order.
 /// `cargo bench` adds `--bench`, which takes no value and is skipped, as is anything else that
 /// does not start with `--`.

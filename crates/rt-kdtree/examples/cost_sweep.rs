@@ -49,17 +49,14 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
             "K_T 25, 3 bad refines, depth 7+",
             KdParams {
                 empty_cut: 0.0,
-                ..KdParams::sah()
+                ..KdParams::fewest_tests()
             },
         ),
-        ("  with empty cut 0.25 (sah)", KdParams::sah()),
         (
-            "  with leaf size 3",
-            KdParams {
-                leaf_size: 3,
-                ..KdParams::sah()
-            },
+            "  with empty cut 0.25 (fewest-tests)",
+            KdParams::fewest_tests(),
         ),
+        ("  with leaf size 3 (sah, default)", KdParams::sah()),
     ];
     println!(
         "{:<32} {:>9} {:>5} {:>9} {:>10} {:>9} {:>8} {:>8}",

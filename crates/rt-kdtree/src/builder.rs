@@ -1032,7 +1032,13 @@ mod tests {
             ..KdParams::sah()
         };
         assert_eq!(KdTree::build(&tris, &three).nodes().len(), 1);
-        assert!(KdTree::build(&tris, &KdParams::sah()).nodes().len() > 1);
+        assert_eq!(KdTree::build(&tris, &KdParams::sah()).nodes().len(), 1);
+        assert!(
+            KdTree::build(&tris, &KdParams::fewest_tests())
+                .nodes()
+                .len()
+                > 1
+        );
     }
 
     #[test]

@@ -88,16 +88,17 @@
 //! primitive. The default ([`KdParams::sah`]) lets a path take up to three non-improving splits,
 //! which finds the splits that pay off two levels down, while a higher K_T and one level less of
 //! depth keep the tree from growing where they do not; cutting off wide empty slabs without
-//! pricing pays for most of the extra build time. The default prices every node down to one
-//! primitive, which keeps its promise of fewer primitive tests per ray than the binary SAH BVH.
-//! `leaf_size: 3` trades a few tests for a smaller tree that builds and traces faster: a node of
-//! at most three primitives prices no plane (its wide empty slabs are still cut off). Pricing the
-//! planes of a node of two or three primitives mostly adds levels of small cells, which a ray
-//! crosses in more steps than the tests they save; on the meshes measured, stopping at three was
-//! faster on every ray kind, and stopping at four or more lost on some views. Prefer
-//! `wald_havran` for a smaller tree than the default's at the same leaf size. Keep `leaf_size` at
-//! 0 and lower `traversal_cost` when a primitive test is expensive compared with a traversal step
-//! (curved or displaced primitives).
+//! pricing pays for most of the extra build time. It stops pricing planes at three primitives
+//! (`leaf_size: 3`): a node of at most three primitives becomes a leaf (its wide empty slabs are
+//! still cut off). Pricing the planes of a node of two or three primitives mostly adds levels of
+//! small cells, which a ray crosses in more steps than the tests they save; on the meshes
+//! measured, stopping at three was faster on every ray kind and built faster, and stopping at
+//! four or more lost on some views. [`KdParams::fewest_tests`] is the same tree priced down to
+//! one primitive: it keeps the textbook promise of fewer primitive tests per ray than the binary
+//! SAH BVH, and pays for it in nodes, build time and speed. Prefer `wald_havran` for a smaller
+//! tree than `fewest_tests`'s at the same leaf size. Keep `leaf_size` at 0 and lower
+//! `traversal_cost` when a primitive test is expensive compared with a traversal step (curved or
+//! displaced primitives).
 //! `cargo run --release -p rt-kdtree --example cost_sweep` prints the trade-off (nodes, depth,
 //! references, visits and tests per ray, build time, speed) on the bunny.
 //!
@@ -196,12 +197,23 @@ pub struct KdParams {
 }
 
 impl KdParams {
-    /// The default: Wald & Havran's cost model and perfect splits, with constants chosen for
-    /// few primitive tests at a bounded build time (see "Choosing the constants" in the crate
-    /// documentation): K_T = 25, K_I = 20, λ = 0.8 for an empty side, up to three splits that do
-    /// not lower the cost on a path, depth limit `7 + 1.3 · log2 N`, and empty slabs wider than a
-    /// quarter of the cell cut off without pricing.
+    /// The default, the tree that traces fastest at equal exactness: Wald & Havran's cost model
+    /// and perfect splits, with constants chosen at a bounded build time (see "Choosing the
+    /// constants" in the crate documentation): K_T = 25, K_I = 20, λ = 0.8 for an empty side, up
+    /// to three splits that do not lower the cost on a path, depth limit `7 + 1.3 · log2 N`,
+    /// empty slabs wider than a quarter of the cell cut off without pricing, and no plane priced
+    /// in a node of three primitives or fewer (`leaf_size: 3`).
     pub fn sah() -> Self {
+        Self {
+            leaf_size: 3,
+            ..Self::fewest_tests()
+        }
+    }
+
+    /// [`sah`](Self::sah) priced down to one primitive (`leaf_size: 0`): the tree that tests the
+    /// fewest primitives per ray, fewer than the binary SAH BVH, for more nodes, a slower build
+    /// and slower traversal. The lecture's claim about the kd-tree is shown with this preset.
+    pub fn fewest_tests() -> Self {
         Self {
             traversal_cost: 25.0,
             intersection_cost: 20.0,
@@ -218,14 +230,15 @@ impl KdParams {
     }
 
     /// Wald & Havran (2006) as published: K_T = 15, K_I = 20, λ = 0.8 for an empty side, perfect
-    /// splits, a leaf as soon as no split beats it, and pbrt's depth limit `8 + 1.3 · log2 N`.
+    /// splits, every node priced down to one primitive and a leaf as soon as no split beats it,
+    /// and pbrt's depth limit `8 + 1.3 · log2 N`.
     pub fn wald_havran() -> Self {
         Self {
             traversal_cost: 15.0,
             empty_cut: 0.0,
             depth_base: 8.0,
             max_bad_refines: 0,
-            ..Self::sah()
+            ..Self::fewest_tests()
         }
     }
 
@@ -355,6 +368,7 @@ impl<P: Primitive> Accel for KdTree<P> {
     fn presets() -> Vec<(&'static str, KdParams)> {
         vec![
             ("sah", KdParams::sah()),
+            ("fewest-tests", KdParams::fewest_tests()),
             ("wald-havran", KdParams::wald_havran()),
             ("restart", KdParams::restart()),
             ("noclip", KdParams::noclip()),

@@ -132,7 +132,7 @@ impl Isa {
             #[cfg(target_arch = "x86_64")]
             Isa::Avx2(s) => x86::run_wide_avx2(s, w),
             #[cfg(target_arch = "x86_64")]
-            Isa::Avx512(s) => x86::run_wide_avx2(s.avx2(), w),
+            Isa::Avx512(s) => x86::run_wide_avx512(s, w),
             #[cfg(target_arch = "x86_64")]
             Isa::Sse2(s) => w.run(s),
             Isa::Portable => w.run(Portable),

@@ -24,7 +24,9 @@ pub struct Sse2;
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Avx2(());
 
-/// Proof that this CPU runs AVX-512F (with AVX2 and FMA): sixteen lanes in one register.
+/// Proof that this CPU runs AVX-512F and AVX-512VL (with AVX2 and FMA): sixteen lanes in one
+/// register, and the eight-lane AVX2 operations with mask registers and thirty-two vector
+/// registers.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Avx512(());
 
@@ -37,10 +39,15 @@ impl Avx2 {
 }
 
 impl Avx512 {
-    /// `Some` when the CPU has AVX-512F, AVX2 and FMA; the only way to make an `Avx512`.
+    /// `Some` when the CPU has AVX-512F, AVX-512VL, AVX2 and FMA; the only way to make an
+    /// `Avx512`. (Every CPU with AVX-512 this project meets, Intel's since Skylake-SP and AMD's
+    /// Zen 4 and Zen 5, has VL.)
     #[inline]
     pub fn detect() -> Option<Self> {
-        (Avx2::detect().is_some() && is_x86_feature_detected!("avx512f")).then_some(Self(()))
+        (Avx2::detect().is_some()
+            && is_x86_feature_detected!("avx512f")
+            && is_x86_feature_detected!("avx512vl"))
+        .then_some(Self(()))
     }
 
     /// The AVX2 proof an AVX-512 CPU carries.
@@ -394,6 +401,22 @@ pub(crate) fn run_avx512<R>(_: Avx512, f: impl FnOnce() -> R) -> R {
     // SAFETY: an `Avx512` exists only if this CPU runs AVX-512F, AVX2 and FMA, all
     // `with_avx512` requires.
     unsafe { with_avx512(f) }
+}
+
+/// Runs `w` with the AVX2 proof, compiled with AVX-512F and AVX-512VL as well: the same
+/// eight-lane operations, which the compiler may encode with mask registers and thirty-two
+/// vector registers.
+#[target_feature(enable = "avx2,fma,avx512f,avx512vl")]
+pub(crate) fn wide_avx512<W: crate::WithLanes>(w: W, s: Avx2) -> W::Out {
+    w.run(s)
+}
+
+/// Runs `w` with the AVX2 operations in a frame compiled for AVX-512F and AVX-512VL.
+#[inline(always)]
+pub(crate) fn run_wide_avx512<W: crate::WithLanes>(s: Avx512, w: W) -> W::Out {
+    // SAFETY: an `Avx512` exists only if this CPU runs AVX-512F, AVX-512VL, AVX2 and FMA, all
+    // `wide_avx512` requires.
+    unsafe { wide_avx512(w, s.avx2()) }
 }
 
 /// Runs `w` with the AVX2 proof in its frame.

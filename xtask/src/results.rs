@@ -1,5 +1,8 @@
-//! `cargo xtask results`: the one page of measurements the README, the guide and the crate docs
-//! link to, so that no figure is copied into a doc where it would go stale.
+//! `cargo xtask results`: the pages of measurements the README, the guide and the crate docs
+//! link to (through the index `docs/results.md`), so that no figure is copied into a doc where
+//! it would go stale. One page per machine kind (`docs/results/KIND.md`,
+//! [`rt_shootout::measure::machine_kind`]): a run on one CPU writes its own kind's page and
+//! leaves the others'.
 //!
 //! It runs a fixed list of this binary's own commands (`compare`, `scale`, `animate`, each with
 //! `--json`) as child processes, exactly as the page shows them, and writes their figures as
@@ -15,12 +18,21 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::Instant;
 
+/// Where the pages live: one per machine kind, and the index that lists them.
+const PAGES_DIR: &str = "docs/results";
+const INDEX: &str = "docs/results.md";
+
 /// Flags of `cargo xtask results`.
 #[derive(clap::Args, Debug)]
 pub struct Args {
-    /// The page to write.
-    #[arg(short, long, default_value = "docs/results.md")]
-    pub out: PathBuf,
+    /// The page to write. By default this machine kind's page, `docs/results/KIND.md` (`KIND`
+    /// as `amd-zen4`, `amd-zen5`, `intel-emerald-rapids`), after which the index
+    /// `docs/results.md` is written again to list every machine kind's page.
+    #[arg(short, long)]
+    pub out: Option<PathBuf>,
+    /// Only write the index `docs/results.md` again from the pages in `docs/results/`.
+    #[arg(long, conflicts_with_all = ["out", "quick", "embree"])]
+    pub index: bool,
     /// A small page from small runs on built-in scenes (seconds instead of minutes), to check
     /// the generator itself; its figures measure nothing worth quoting.
     #[arg(long)]
@@ -119,19 +131,73 @@ pub enum Failure {
     Run(String),
 }
 
-/// Runs the task: every measurement, then the page. Returns the page's path.
+/// Runs the task: every measurement, then the page (and the index, for the default page).
+/// Returns the path written.
 pub fn run(args: &Args) -> Result<PathBuf, Failure> {
-    crate::render::check_output(&args.out, "Markdown").map_err(Failure::BadInput)?;
+    if args.index {
+        return write_index().map_err(Failure::Run);
+    }
+    let out = page_path(args);
+    crate::render::check_output(&out, "Markdown").map_err(Failure::BadInput)?;
     if !args.quick && !Path::new(BUNNY).is_file() {
         return Err(Failure::BadInput(format!(
             "{BUNNY} not found: run from the repository root with the shared meshes beside it \
              (or use --quick)"
         )));
     }
-    measure_all(args).map_err(Failure::Run)
+    let page = measure_all(args, &out).map_err(Failure::Run)?;
+    if args.out.is_none() {
+        write_index().map_err(Failure::Run)?;
+    }
+    Ok(page)
 }
 
-fn measure_all(args: &Args) -> Result<PathBuf, String> {
+/// The page `args` write: `--out`, else this machine kind's page.
+fn page_path(args: &Args) -> PathBuf {
+    args.out.clone().unwrap_or_else(|| {
+        Path::new(PAGES_DIR).join(format!("{}.md", rt_shootout::measure::machine_kind().slug))
+    })
+}
+
+/// Writes the index, `docs/results.md`: every page in `docs/results/` with its stamp.
+fn write_index() -> Result<PathBuf, String> {
+    let mut pages: Vec<PathBuf> = std::fs::read_dir(PAGES_DIR)
+        .map_err(|e| format!("{PAGES_DIR}: {e}"))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .collect();
+    pages.sort();
+    let mut index = String::from(
+        "# Results\n\nThe measurements, one page per kind of machine they were made on, so that a \
+         run on one CPU never overwrites another's figures: what is fastest differs between CPUs \
+         (see the kernel table, `cargo bench -p rt-benches --bench kernels`). Each page is \
+         written by `cargo xtask results --embree` on its machine, stamped with the date, the \
+         commit, the CPU and its kind, and has the same sections: primary rays, more meshes, \
+         other rays, one thread, ray bundles, closest points, signed distance, instances, scale, \
+         dynamic scenes, saved structures, and rt-bvh against Embree 3. Compare figures within \
+         one page; across pages, compare ratios.\n\n| machine kind | written |\n| --- | --- |\n",
+    );
+    for page in &pages {
+        let text = std::fs::read_to_string(page).map_err(|e| format!("{}: {e}", page.display()))?;
+        let stamp = text
+            .lines()
+            .find(|l| l.starts_with("Written by "))
+            .ok_or_else(|| {
+                format!(
+                    "{}: no stamp (a line starting `Written by`)",
+                    page.display()
+                )
+            })?;
+        let name = page
+            .file_stem()
+            .map_or(String::new(), |s| s.to_string_lossy().into_owned());
+        let _ = writeln!(index, "| [{name}](results/{name}.md) | {stamp} |");
+    }
+    std::fs::write(INDEX, index).map_err(|e| format!("{INDEX}: cannot write: {e}"))?;
+    Ok(PathBuf::from(INDEX))
+}
+
+fn measure_all(args: &Args, out: &Path) -> Result<PathBuf, String> {
     let plan = Plan::new(args.quick);
     let started = Instant::now();
     let mut page = stamp(args)?;
@@ -286,9 +352,8 @@ fn measure_all(args: &Args) -> Result<PathBuf, String> {
         "\n---\nAll runs took {:.0} s.",
         started.elapsed().as_secs_f64()
     );
-    std::fs::write(&args.out, page)
-        .map_err(|e| format!("{}: cannot write: {e}", args.out.display()))?;
-    Ok(args.out.clone())
+    std::fs::write(out, page).map_err(|e| format!("{}: cannot write: {e}", out.display()))?;
+    Ok(out.to_path_buf())
 }
 
 /// One finished run: its command line as the page shows it, and its JSON.
@@ -334,6 +399,7 @@ fn stamp(args: &Args) -> Result<String, String> {
     let dirty =
         git(&["status", "--porcelain", "--untracked-files=no"]).is_some_and(|s| !s.is_empty());
     let cpu = rt_shootout::measure::cpu_model();
+    let kind = rt_shootout::measure::machine_kind().name;
     let threads = std::thread::available_parallelism().map_or(1, |n| n.get());
     let rustc = Command::new("rustc")
         .arg("--version")
@@ -348,8 +414,8 @@ fn stamp(args: &Args) -> Result<String, String> {
     }
     let _ = writeln!(
         s,
-        "Written by `cargo xtask results{}{}` on {} (UTC) at commit {commit}{}, on {cpu} with \
-         {threads} threads, built by {rustc} with the workspace's release profile \
+        "Written by `cargo xtask results{}{}` on {} (UTC) at commit {commit}{}, on {cpu} \
+         ({kind}) with {threads} threads, built by {rustc} with the workspace's release profile \
          (`codegen-units = 1`, thin LTO).\n",
         if args.quick { " --quick" } else { "" },
         if args.embree { " --embree" } else { "" },

@@ -269,10 +269,44 @@ fn slug(heading: &str) -> String {
         .collect()
 }
 
+/// The results pages, one per machine kind (`docs/results/*.md`).
+fn results_pages() -> Vec<PathBuf> {
+    let mut pages: Vec<PathBuf> = std::fs::read_dir(root().join("docs/results"))
+        .expect("docs/results/")
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "md"))
+        .collect();
+    pages.sort();
+    pages
+}
+
+/// The index `docs/results.md` lists every machine kind's page, with its stamp, as
+/// `cargo xtask results --index` writes it.
+#[test]
+fn the_results_index_lists_every_page() {
+    let index = std::fs::read_to_string(root().join("docs/results.md")).unwrap();
+    let pages = results_pages();
+    assert!(!pages.is_empty(), "no page in docs/results/");
+    for page in pages {
+        let name = page.file_stem().unwrap().to_string_lossy().into_owned();
+        let text = std::fs::read_to_string(&page).unwrap();
+        let stamp = text
+            .lines()
+            .find(|l| l.starts_with("Written by "))
+            .unwrap_or_else(|| panic!("{}: no stamp", page.display()));
+        let row = format!("| [{name}](results/{name}.md) | {stamp} |");
+        assert!(
+            index.contains(&row),
+            "docs/results.md lacks the row of {name} (run `cargo xtask results --index`):\n{row}"
+        );
+    }
+}
+
 /// Every Markdown file of the repository that a reader follows links in.
 fn linked_pages() -> Vec<PathBuf> {
     let mut pages = guide_pages();
     pages.push(root().join("docs/results.md"));
+    pages.extend(results_pages());
     for extra in ["ARCHITECTURE.md", "labs/README.md", "fuzz/README.md"] {
         pages.push(root().join(extra));
     }

@@ -164,8 +164,9 @@
 //!
 //! # Measurements
 //! Every figure (the shootout, rt-bvh against Embree 3, what each step from the binary tree
-//! gains, builds at scale) is on one generated page, `docs/results.md` in the repository, stamped
-//! with the date, the commit and the CPU, and written by `cargo xtask results`; the commands
+//! gains, builds at scale) is on the generated results pages, one per machine kind (`docs/results.md` in the
+//! repository lists them), each stamped with the date, the commit and the CPU, and written by
+//! `cargo xtask results`; the commands
 //! that measure each part are `cargo xtask compare`, `cargo bench -p rt-benches --features
 //! embree --bench peers`, `cargo run --release -p rt-bvh --example steps` and `--example large`.
 //!
@@ -366,8 +367,8 @@ impl BvhParams {
     /// [`wide`](Self::wide), with three passes of reinsertion: the same leaves, with subtrees
     /// moved to where they add the least area. It pays where triangle sizes vary widely (a
     /// teapot in a stadium) and costs about twice the build time; on scanned meshes of even
-    /// triangles the binned tree is already close to what reinsertion finds. The results page
-    /// (`docs/results.md`, see [Measurements](crate#measurements)) has a row for each.
+    /// triangles the binned tree is already close to what reinsertion finds. The results pages
+    /// (`docs/results.md`, see [Measurements](crate#measurements)) have a row for each.
     pub fn reinserted() -> Self {
         Self {
             reinsertion_passes: 3,

@@ -83,8 +83,9 @@
 //!   patterns ([`par`]) and [`bundle::intersect_frame`] run on rayon's threads. Without it they
 //!   run in order on the calling thread and give the same answers.
 //!
-//! Measurements of every structure are on one generated page, `docs/results.md` in the
-//! repository (date, commit, CPU; written by `cargo xtask results`).
+//! Measurements of every structure are on the generated results pages, one per machine kind,
+//! listed by `docs/results.md` in the repository (date, commit, CPU; written by `cargo xtask
+//! results`).
 #![warn(missing_docs)]
 
 mod aabb;

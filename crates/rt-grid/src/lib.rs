@@ -73,8 +73,8 @@
 //! the saved one.
 //!
 //! # Measurements
-//! On one generated page, `docs/results.md` in the repository (date, commit, CPU; written by
-//! `cargo xtask results`). What they show: where primitives are spread evenly (the random soup)
+//! On the generated results pages, one per machine kind, listed by `docs/results.md` in the
+//! repository (date, commit, CPU; written by `cargo xtask results`). What they show: where primitives are spread evenly (the random soup)
 //! the grid traces as fast as a BVH and its mailbox saves a third of its tests; on a surface
 //! (the bunny) most cells are empty and a tree is several times faster; on the teapot in a
 //! stadium, cells sized for the stadium hold thousands of the teapot's triangles — the lecture's

@@ -55,8 +55,8 @@
 //! query bit for bit as the saved one.
 //!
 //! # Measurements
-//! On one generated page, `docs/results.md` in the repository (date, commit, CPU; written by
-//! `cargo xtask results`). What they show: on the teapot in a stadium, where the uniform grid's
+//! On the generated results pages, one per machine kind, listed by `docs/results.md` in the
+//! repository (date, commit, CPU; written by `cargo xtask results`). What they show: on the teapot in a stadium, where the uniform grid's
 //! cells sized for the stadium hold thousands of the teapot's triangles, the hierarchical grid
 //! tests two orders of magnitude fewer primitives per ray for a little more memory
 //! ([`HGridParams::lean`] takes no more memory than the uniform grid and still tests far fewer).

@@ -113,11 +113,13 @@
 //! # Measurements
 //! The kd-tree's figures beside every other structure's (build time, memory, shape, visits and
 //! tests per ray, speed on several scenes and ray kinds, one thread and two), and the sweep
-//! above, are on one generated page, `docs/results.md` in the repository, stamped with the date,
-//! the commit and the CPU and written by `cargo xtask results`. In short: the default tree tests
-//! fewer triangles per ray than the binned-SAH BVH but visits more nodes, builds several times
-//! slower, and the stackless restart pays for its restarts with extra visits (on a CPU a fixed
-//! stack costs nothing worth saving).
+//! above, are on the generated results pages, one per machine kind (`docs/results.md` in the
+//! repository lists them), stamped with the date, the commit and the CPU and written by
+//! `cargo xtask results`. In short: the `fewest-tests` tree
+//! tests fewer triangles per ray than the binned-SAH BVH and the default a few more; both visit
+//! several times more nodes and build several times slower than the wide BVH, and the stackless
+//! restart pays for its restarts with extra visits (on a CPU a fixed stack costs nothing worth
+//! saving).
 //!
 //! # Example
 //! ```

@@ -97,8 +97,8 @@
 //! bit for bit as the saved one.
 //!
 //! # Measurements
-//! On one generated page, `docs/results.md` in the repository (date, commit, CPU; written by
-//! `cargo xtask results`). What they show: the octree visits a fraction of the uniform grid's
+//! On the generated results pages, one per machine kind, listed by `docs/results.md` in the
+//! repository (date, commit, CPU; written by `cargo xtask results`). What they show: the octree visits a fraction of the uniform grid's
 //! cells on surfaces and needs two orders of magnitude fewer tests on the teapot in a stadium,
 //! in less memory; on surfaces the BVHs are faster still (cubes cannot follow a surface as
 //! fitted boxes do, and a step costs more); where primitives are spread evenly the uniform grid

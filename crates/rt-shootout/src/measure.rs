@@ -71,6 +71,86 @@ pub fn measure<A: Accel>(
     }
 }
 
+/// A kind of machine, as the results pages are kept: one page per kind, so that a run on one
+/// CPU never overwrites the figures of another.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct MachineKind {
+    /// A file name for the kind: `amd-zen4`, `amd-zen5`, `intel-emerald-rapids`, ...
+    pub slug: String,
+    /// The kind in words, with the CPU family and model it was told by.
+    pub name: String,
+}
+
+/// The kind of this machine's CPU, from the vendor, family and model in `/proc/cpuinfo`
+/// ([`machine_kind_of`]); the architecture where there is no such file.
+pub fn machine_kind() -> MachineKind {
+    let info = std::fs::read_to_string("/proc/cpuinfo").unwrap_or_default();
+    let field = |name: &str| {
+        info.lines()
+            .find(|l| l.split(':').next().is_some_and(|k| k.trim() == name))
+            .and_then(|l| l.split(':').nth(1))
+            .map(|v| v.trim().to_string())
+    };
+    let number = |name: &str| field(name).and_then(|v| v.parse::<u32>().ok());
+    match (field("vendor_id"), number("cpu family"), number("model")) {
+        (Some(vendor), Some(family), Some(model)) => machine_kind_of(&vendor, family, model),
+        _ => {
+            let arch = std::env::consts::ARCH;
+            MachineKind {
+                slug: arch.replace('_', "-"),
+                name: arch.to_string(),
+            }
+        }
+    }
+}
+
+/// The kind of a CPU by its vendor (`vendor_id`), family and model: AMD's Zen generations
+/// (family 23: Zen 1 and 2; family 25: Zen 3 and 4 by model range; family 26: Zen 5) and
+/// Intel's Xeon server generations (family 6), else the vendor with the family and model.
+pub fn machine_kind_of(vendor: &str, family: u32, model: u32) -> MachineKind {
+    let generation = match (vendor, family) {
+        ("AuthenticAMD", 23) if model >= 0x30 => Some(("amd-zen2", "AMD Zen 2")),
+        ("AuthenticAMD", 23) => Some(("amd-zen1", "AMD Zen 1")),
+        ("AuthenticAMD", 25) => Some(match model {
+            0x10..=0x1f | 0x60..=0x7f | 0xa0..=0xaf => ("amd-zen4", "AMD Zen 4"),
+            _ => ("amd-zen3", "AMD Zen 3"),
+        }),
+        ("AuthenticAMD", 26) => Some(("amd-zen5", "AMD Zen 5")),
+        ("GenuineIntel", 6) => match model {
+            0x55 => Some(("intel-skylake-sp", "Intel Skylake-SP or Cascade Lake")),
+            0x6a | 0x6c => Some(("intel-ice-lake-sp", "Intel Ice Lake-SP")),
+            0x8f => Some(("intel-sapphire-rapids", "Intel Sapphire Rapids")),
+            0xcf => Some(("intel-emerald-rapids", "Intel Emerald Rapids")),
+            0xad | 0xae => Some(("intel-granite-rapids", "Intel Granite Rapids")),
+            _ => None,
+        },
+        _ => None,
+    };
+    let numbers = format!("family {family}, model {model}");
+    match generation {
+        Some((slug, name)) => MachineKind {
+            slug: slug.to_string(),
+            name: format!("{name} ({numbers})"),
+        },
+        None => {
+            let short = match vendor {
+                "AuthenticAMD" => "amd",
+                "GenuineIntel" => "intel",
+                other => other,
+            };
+            let slug: String = format!("{short}-family{family}-model{model}")
+                .to_lowercase()
+                .chars()
+                .filter(|c| c.is_ascii_alphanumeric() || *c == '-')
+                .collect();
+            MachineKind {
+                slug,
+                name: format!("{vendor} ({numbers})"),
+            }
+        }
+    }
+}
+
 /// The CPU's model name (from `/proc/cpuinfo` on Linux), else the architecture: what a
 /// measurement's stamp names.
 pub fn cpu_model() -> String {

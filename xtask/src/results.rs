@@ -174,8 +174,9 @@ fn write_index() -> Result<PathBuf, String> {
          written by `cargo xtask results --embree` on its machine, stamped with the date, the \
          commit, the CPU and its kind, and has the same sections: primary rays, more meshes, \
          other rays, one thread, ray bundles, closest points, signed distance, instances, scale, \
-         dynamic scenes, saved structures, and rt-bvh against Embree 3. Compare figures within \
-         one page; across pages, compare ratios.\n\n| machine kind | written |\n| --- | --- |\n",
+         dynamic scenes, saved structures, kernels on this CPU, and rt-bvh against Embree 3. \
+         A page older than a section lacks it. Compare figures within one page; across pages, \
+         compare ratios.\n\n| machine kind | written |\n| --- | --- |\n",
     );
     for page in &pages {
         let text = std::fs::read_to_string(page).map_err(|e| format!("{}: {e}", page.display()))?;
@@ -342,6 +343,7 @@ fn measure_all(args: &Args, out: &Path) -> Result<PathBuf, String> {
     // Minutes of builds at 10M triangles: the quick page leaves it out too.
     if !args.quick {
         page += &saved()?;
+        page += &kernels()?;
     }
 
     if args.embree {
@@ -741,6 +743,19 @@ fn saved() -> Result<String, String> {
          invariant validated), each the median of three runs, both on all threads. Every \
          loaded structure traces a 128 × 128 camera's primary rays and must answer them bit \
          for bit as the built one (the hit share beside).\n\n{table}"
+    ))
+}
+
+/// Which instruction set traces fastest on this CPU: the kernels benchmark's own tables.
+fn kernels() -> Result<String, String> {
+    let (command, tables) = cargo_bench(&["--bench", "kernels"])?;
+    Ok(format!(
+        "\n## Kernels on this CPU\n\n`{command}`: rt-bvh's wide tree traced with every \
+         instruction set this CPU runs, each forced in turn on the same tree and the same rays \
+         (primary and shadow rays from the view each scene fills, incoherent rays), over every \
+         built-in scene and shared mesh, one thread, passes interleaved, medians; every set's \
+         answers equal the portable kernels' bit for bit. The run-time choice \
+         (`rt_simd::Isa::detect`) should be the fastest here.\n{tables}"
     ))
 }
 

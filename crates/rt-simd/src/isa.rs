@@ -139,6 +139,17 @@ impl Isa {
         }
     }
 
+    /// [`Isa::wide`], but with [`Isa::Avx512`] in the AVX2 frame (AVX2 and FMA only): for
+    /// walks that measured slower in the AVX-512 frame (the bundle walks; see [`Isa::run`]).
+    #[inline(always)]
+    pub fn wide_avx2_frame<W: WithLanes>(self, w: W) -> W::Out {
+        match self {
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx512(s) => x86::run_wide_avx2(s.avx2(), w),
+            _ => self.wide(w),
+        }
+    }
+
     /// Runs `f` compiled for this instruction set where the CPU has it (else as the build's
     /// target has it): with [`Isa::Avx2`] or [`Isa::Avx512`], inside a function compiled with
     /// AVX2 and FMA enabled, so that the code `f` inlines (a bundle walk's loops over eight

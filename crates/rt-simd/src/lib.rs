@@ -58,6 +58,25 @@ pub use watertight::{Hits, watertight};
 #[cfg(target_arch = "x86_64")]
 pub use x86::{Avx2, Avx512, Sse2};
 
+/// Asks the CPU to bring cache lines `first .. first + lines` of `v` (the 64 bytes at byte
+/// `64 * line` of its memory, for each `line`) into its caches, those inside `v`: a hint,
+/// which changes no value. It lets a walk start the memory reads of the nodes it will visit
+/// next while it works on the current one. On CPUs other than x86-64 it does nothing.
+///
+/// ```
+/// let nodes = vec![0u8; 100];
+/// // Lines 0 and 1 hold bytes of `nodes`; lines 2 and 3 would lie past its end and are skipped.
+/// rt_simd::prefetch(&nodes, 0, 4);
+/// rt_simd::prefetch::<u8>(&[], 0, 1);
+/// ```
+#[inline(always)]
+pub fn prefetch<T>(v: &[T], first: usize, lines: usize) {
+    #[cfg(target_arch = "x86_64")]
+    x86::prefetch_lines(v, first, lines);
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = (v, first, lines);
+}
+
 /// The README's example, compiled and run as a doctest so that it stays true.
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]

@@ -426,15 +426,19 @@ pub(crate) fn run_wide_avx2<W: crate::WithLanes>(s: Avx2, w: W) -> W::Out {
     unsafe { wide_avx2(w, s) }
 }
 
-/// Asks the CPU to bring cache line `line` of the rays `rays` (the one at byte `64 * line`)
-/// into its caches, if the rays reach it; a hint only, which changes no value.
+/// Asks the CPU to bring the cache lines at bytes `64 * first .. 64 * (first + lines)` of `v`
+/// into its caches, those that lie inside `v`; a hint only, which changes no value.
 #[inline(always)]
-pub(crate) fn prefetch_line(rays: &[Ray], line: usize) {
-    let offset = line * 64;
-    if offset < size_of_val(rays) {
-        // SAFETY: the address lies inside `rays` (`offset` is less than its size in bytes); a
+pub(crate) fn prefetch_lines<T>(v: &[T], first: usize, lines: usize) {
+    let size = size_of_val(v);
+    for line in first..first + lines {
+        let offset = line * 64;
+        if offset >= size {
+            break;
+        }
+        // SAFETY: the address lies inside `v` (`offset` is less than its size in bytes); a
         // prefetch reads nothing a program sees and never faults.
-        unsafe { _mm_prefetch::<_MM_HINT_T0>(rays.as_ptr().cast::<i8>().add(offset)) };
+        unsafe { _mm_prefetch::<_MM_HINT_T0>(v.as_ptr().cast::<i8>().add(offset)) };
     }
 }
 

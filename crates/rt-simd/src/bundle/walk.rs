@@ -327,12 +327,9 @@ fn may_cohere(run: &[Ray]) -> bool {
     })
 }
 
-/// Asks the CPU to bring cache line `line` of `rays` into its caches (x86-64 only; a hint,
-/// which changes no value).
+/// Asks the CPU to bring cache line `line` of `rays` into its caches (a hint, which changes no
+/// value).
 #[inline(always)]
 fn prefetch_line(rays: &[Ray], line: usize) {
-    #[cfg(target_arch = "x86_64")]
-    crate::x86::prefetch_line(rays, line);
-    #[cfg(not(target_arch = "x86_64"))]
-    let _ = (rays, line);
+    crate::prefetch(rays, line, 1);
 }

@@ -57,8 +57,9 @@
 //!   that pick each axis' near and far plane by the direction's sign, subtractions,
 //!   multiplications and min/max, one compare and a mask: 256-bit operations with AVX2, two
 //!   128-bit halves with SSE2), then the children entered are sorted by entry distance (closest
-//!   hit) or pushed as they are (any hit), and every inner child entered is prefetched, so
-//!   that the memory reads of the nodes a ray will visit overlap. A leaf visit is one 4-lane triangle test per pack
+//!   hit: sorting networks, whose compare-exchanges do not branch on the distances) or pushed as
+//!   they are (any hit), and every inner child entered is prefetched, so that the memory reads
+//!   of the nodes a ray will visit overlap. A leaf visit is one 4-lane triangle test per pack
 //!   (about forty vector operations; the watertight test skips its division when no lane can
 //!   hit). The binary step: two scalar slab tests, the nearer child next, the farther pushed.
 //! - **Stack**: fixed, `7 · MAX_DEPTH` entries of 8 bytes, not zeroed per ray.

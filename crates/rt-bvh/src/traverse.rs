@@ -242,6 +242,61 @@ fn prefetch_node(nodes: &[WideNode], c: ChildRef) {
     }
 }
 
+/// Sorts `k[..n]` in descending order: by sorting networks of compare-exchanges for two to
+/// eight keys (min and max, no branch on the keys). Slots `n..` must hold zeros.
+///
+/// The walk's keys are a child's entry distance bits above its reference: for the distances
+/// of rays with `t_min >= 0` (never negative) the bits order as the numbers do. Any order
+/// would give the same answers (a popped child is skipped by its own stored distance), so
+/// keys that order differently (a negative `t_min`) cost only speed.
+// PERF: against an insertion sort of (reference, distance) pairs, whose comparisons branch at
+// random for incoherent rays. Intel Emerald Rapids, one thread, private harness, best of 5
+// passes, two alternating runs, Mrays/s, incoherent rays: the bunny 4.96 4.98 -> 5.24 5.28,
+// the teapot 6.40 6.43 -> 6.86 6.85, the rocker arm 4.51 4.57 -> 4.89 4.90, spot 6.24 6.23 ->
+// 6.71 6.66; primary rays -1% to +4%, shadow rays (which do not sort) unchanged. Networks up
+// to four keys with insertion beyond ran 0-1% slower than this; a branch-free rank sort
+// (each key's slot the count of keys above it) 10% slower on primary and incoherent rays.
+#[inline(always)]
+fn sort_descending(k: &mut [u64; WIDTH], n: usize) {
+    let cx = |k: &mut [u64; WIDTH], a: usize, b: usize| {
+        let (x, y) = (k[a], k[b]);
+        k[a] = x.max(y);
+        k[b] = x.min(y);
+    };
+    match n {
+        0 | 1 => {}
+        2 => cx(k, 0, 1),
+        3 => {
+            cx(k, 0, 1);
+            cx(k, 1, 2);
+            cx(k, 0, 1);
+        }
+        4 => {
+            cx(k, 0, 1);
+            cx(k, 2, 3);
+            cx(k, 0, 2);
+            cx(k, 1, 3);
+            cx(k, 1, 2);
+        }
+        // Five to eight keys: the 19 compare-exchanges that sort eight (Knuth, TAOCP vol. 3,
+        // §5.3.4), the slots past `n` holding zeros, which sort last.
+        _ => {
+            for layer in [
+                &[(0, 2), (1, 3), (4, 6), (5, 7)][..],
+                &[(0, 4), (1, 5), (2, 6), (3, 7)],
+                &[(0, 1), (2, 3), (4, 5), (6, 7)],
+                &[(2, 4), (3, 5)],
+                &[(1, 4), (3, 6)],
+                &[(1, 2), (3, 4), (5, 6)],
+            ] {
+                for &(a, b) in layer {
+                    cx(k, a, b);
+                }
+            }
+        }
+    }
+}
+
 /// Triangle packs and the kernel that tests them (`MT`: Möller–Trumbore, else watertight).
 pub(crate) struct Packs<'a, const MT: bool> {
     pub packs: &'a [TriPack],
@@ -602,24 +657,21 @@ pub(crate) fn wide<X: Wide, L: Leaves, S: Stats, Q: RayQuery>(
                     (current, t_current) = (node.child(first), t_entry[first]);
                     continue;
                 } else {
-                    // Insertion sort of the entered children, farthest first.
+                    // The entered children sorted farthest first, by keys of the entry
+                    // distance's bits above the child reference.
                     let t_entry = Simd::<8>::store(simd, t_entry);
-                    let mut hits = [(0u32, 0.0f32); WIDTH];
+                    let mut k = [0u64; WIDTH];
                     let mut n = 0;
                     let mut m = mask;
                     while m != 0 {
                         let i = m.trailing_zeros() as usize;
                         m &= m - 1;
-                        let e = (node.children[i], t_entry[i]);
+                        k[n] = u64::from(t_entry[i].to_bits()) << 32 | u64::from(node.children[i]);
                         prefetch_node(nodes, node.child(i));
-                        let mut j = n;
-                        while j > 0 && hits[j - 1].1 < e.1 {
-                            hits[j] = hits[j - 1];
-                            j -= 1;
-                        }
-                        hits[j] = e;
                         n += 1;
                     }
+                    sort_descending(&mut k, n);
+                    let hits = k.map(|k| (k as u32, f32::from_bits((k >> 32) as u32)));
                     for &h in &hits[..n - 1] {
                         stack.push(h);
                         trace::report(stats, || Event::Push {

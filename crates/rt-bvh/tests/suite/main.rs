@@ -7,6 +7,7 @@ mod conformance;
 mod degenerate;
 mod instances;
 mod kernels;
+mod order;
 mod overlap;
 mod parallel;
 mod refit;

@@ -68,6 +68,7 @@ pub use x86::{Avx2, Avx512, Sse2};
 /// // Lines 0 and 1 hold bytes of `nodes`; lines 2 and 3 would lie past its end and are skipped.
 /// rt_simd::prefetch(&nodes, 0, 4);
 /// rt_simd::prefetch::<u8>(&[], 0, 1);
+/// rt_simd::prefetch(&nodes, usize::MAX, usize::MAX); // nothing there, and no overflow
 /// ```
 #[inline(always)]
 pub fn prefetch<T>(v: &[T], first: usize, lines: usize) {

@@ -431,11 +431,10 @@ pub(crate) fn run_wide_avx2<W: crate::WithLanes>(s: Avx2, w: W) -> W::Out {
 #[inline(always)]
 pub(crate) fn prefetch_lines<T>(v: &[T], first: usize, lines: usize) {
     let size = size_of_val(v);
-    for line in first..first + lines {
-        let offset = line * 64;
-        if offset >= size {
+    for line in first..first.saturating_add(lines) {
+        let Some(offset) = line.checked_mul(64).filter(|&offset| offset < size) else {
             break;
-        }
+        };
         // SAFETY: the address lies inside `v` (`offset` is less than its size in bytes); a
         // prefetch reads nothing a program sees and never faults.
         unsafe { _mm_prefetch::<_MM_HINT_T0>(v.as_ptr().cast::<i8>().add(offset)) };

@@ -409,24 +409,43 @@ fn bench_bundles(scene: &BenchScene, o: &Options, out: &mut Vec<BundleResult>) {
         (device, e)
     };
     let light = rt_scene::raygen::default_light(&scene.bounds());
-    // Primary rays and the shadow rays of their hits, in the primary rays' order.
-    let with_shadows = |primary: Vec<Ray>| {
+    // Primary rays and the shadow rays of their hits, in the primary rays' order, each set with
+    // its rays' pixels.
+    let with_shadows = |primary: Vec<Ray>, pixels: Vec<u32>| {
         let hits: Vec<Option<Hit>> = primary.iter().map(|r| bvh.intersect(r)).collect();
         let shadow = rt_scene::raygen::shadow_rays(&primary, &hits, &scene.triangles, light);
-        (primary, shadow)
+        // One shadow ray per hit, in the hits' order.
+        let lit: Vec<u32> = pixels
+            .iter()
+            .zip(&hits)
+            .filter(|(_, h)| h.is_some())
+            .map(|(&p, _)| p)
+            .collect();
+        assert_eq!(lit.len(), shadow.len(), "one shadow ray per hit");
+        ((primary, pixels), (shadow, lit))
     };
+    // `intersect_image` on one thread, as every contender here runs.
+    let one_thread = rayon::ThreadPoolBuilder::new()
+        .num_threads(1)
+        .build()
+        .expect("a one-thread pool");
     for (view, camera) in views(scene, o) {
-        let (tiled, _) = camera.tiled_rays(o.width, o.height, (8, 8));
-        let (primary, shadow) = with_shadows(tiled);
+        let (tiled, pixels) = camera.tiled_rays(o.width, o.height, (8, 8));
+        let (primary, shadow) = with_shadows(tiled, pixels);
         let mut sets = vec![("primary", primary), ("shadow", shadow)];
         // As many renderers make them: a row of pixels after another, and the shadow rays of
         // their hits in the same order, handed over as they come.
         if view == "filled" {
-            let (primary, shadow) = with_shadows(camera.primary_rays(o.width, o.height));
+            let rows = camera.primary_rays(o.width, o.height);
+            let pixels = (0..rows.len() as u32).collect();
+            let (primary, shadow) = with_shadows(rows, pixels);
             sets.extend([("primary, rows", primary), ("shadow, rows", shadow)]);
         }
-        for (kind, rays) in &sets {
-            let (kind, rays) = (*kind, rays);
+        for (kind, (rays, pixels)) in &sets {
+            let kind = *kind;
+            // Rays in tile order are not in image order: `intersect_image` traces them as
+            // they come, which times its check.
+            let image = rt_core::bundle::Image::pixels(o.width, pixels);
             let any = kind.starts_with("shadow");
             let mut single = vec![None; rays.len()];
             let mut bundled = vec![None; rays.len()];
@@ -442,6 +461,12 @@ fn bench_bundles(scene: &BenchScene, o: &Options, out: &mut Vec<BundleResult>) {
                     .for_each(|(o, r)| *o = bvh.occluded(r));
                 bvh.occluded_bundle(rays, &mut blocked_b);
                 assert_eq!(blocked, blocked_b, "bundles differ: {} {view}", scene.name);
+                rt_core::bundle::occluded_image(&bvh, rays, image, &mut blocked_b);
+                assert_eq!(
+                    blocked, blocked_b,
+                    "occluded_image differs: {} {view}",
+                    scene.name
+                );
             } else {
                 single
                     .iter_mut()
@@ -451,6 +476,12 @@ fn bench_bundles(scene: &BenchScene, o: &Options, out: &mut Vec<BundleResult>) {
                 assert!(
                     check(&single, &bundled),
                     "bundles differ: {} {view}",
+                    scene.name
+                );
+                rt_core::bundle::intersect_image(&bvh, rays, image, &mut bundled);
+                assert!(
+                    check(&single, &bundled),
+                    "intersect_image differs: {} {view}",
                     scene.name
                 );
             }
@@ -474,7 +505,8 @@ fn bench_bundles(scene: &BenchScene, o: &Options, out: &mut Vec<BundleResult>) {
             );
             // Embree's two contenders join these with the feature `embree`.
             #[cfg_attr(not(feature = "embree"), allow(unused_mut))]
-            let mut names: Vec<&'static str> = vec!["rt-bvh wide", "rt-bvh wide bundles"];
+            let mut names: Vec<&'static str> =
+                vec!["rt-bvh wide", "rt-bvh wide bundles", "rt-bvh wide image"];
             #[cfg_attr(not(feature = "embree"), allow(unused_mut))]
             let mut fs: Vec<BuildFn<'_>> = vec![
                 Box::new(|| {
@@ -493,6 +525,20 @@ fn bench_bundles(scene: &BenchScene, o: &Options, out: &mut Vec<BundleResult>) {
                     } else {
                         bvh.intersect_bundle(rays, &mut hit);
                     }
+                    std::hint::black_box((&*hit, &*blocked));
+                }),
+                Box::new(|| {
+                    let (mut hit, mut blocked) =
+                        (bundle_out.0.borrow_mut(), bundle_out.1.borrow_mut());
+                    let (hit, blocked): (&mut [Option<Hit>], &mut [bool]) =
+                        (&mut hit, &mut blocked);
+                    one_thread.install(|| {
+                        if any {
+                            rt_core::bundle::occluded_image(&bvh, rays, image, blocked);
+                        } else {
+                            rt_core::bundle::intersect_image(&bvh, rays, image, hit);
+                        }
+                    });
                     std::hint::black_box((&*hit, &*blocked));
                 }),
             ];
@@ -602,33 +648,36 @@ fn bundle_report(results: &[BundleResult]) -> String {
         "\nBundles: primary rays in 8×8 pixel tiles and their shadow rays in the same order \
          (`primary`, `shadow`), and on the filled view primary rays in image order, a row of \
          pixels after another, and their shadow rays in that order (`primary, rows`, `shadow, \
-         rows`); single-threaded. rt-bvh's bundles take 64 consecutive rays. Embree's coherent \
+         rows`); single-threaded. rt-bvh's bundles take 64 consecutive rays; `rt-bvh wide \
+         image` is `rt_core::bundle::intersect_image` (`occluded_image`) given each ray's pixel, \
+         which bundles rays in image order tile by tile (rays in tile order are not in image \
+         order: it traces them as they come). Embree's coherent \
          paths, each with the coherent flag, on the same rays in the same order: packets of 16 \
          consecutive rays (8×2 pixels of a tile), packets of 8, and streams of 64 \
          (`rtcIntersect1M` / `rtcOccluded1M`, which Embree gathers into packets itself). \
-         Mrays/s; bundles ÷ single rays, and bundles ÷ the fastest of Embree's coherent paths on \
-         that row\n"
+         Mrays/s; bundles ÷ single rays, and bundles and image ÷ the fastest of Embree's coherent \
+         paths on that row\n"
     );
     let _ = writeln!(
         s,
-        "| scene | view | rays | count | hit | {} | bundles ÷ single | bundles ÷ Embree's best |",
+        "| scene | view | rays | count | hit | {} | bundles ÷ single | bundles ÷ Embree's best | image ÷ Embree's best |",
         names.join(" | ")
     );
     let _ = writeln!(
         s,
         "| --- | --- | --- | ---: | ---: |{}",
-        " ---: |".repeat(names.len() + 2)
+        " ---: |".repeat(names.len() + 3)
     );
     let get = |r: &BundleResult, name: &str| r.mrays.iter().find(|(n, _)| *n == name).map(|m| m.1);
     // The bundles against the fastest of Embree's coherent paths on this row.
-    let best_embree = |r: &BundleResult| {
+    let best_embree = |r: &BundleResult, ours: &str| {
         let best = r
             .mrays
             .iter()
             .filter(|(n, _)| n.starts_with("embree medium "))
             .map(|m| m.1)
             .reduce(f64::max);
-        match (get(r, "rt-bvh wide bundles"), best) {
+        match (get(r, ours), best) {
             (Some(a), Some(b)) => format!("{:.2}", a / b),
             _ => "-".into(),
         }
@@ -641,7 +690,7 @@ fn bundle_report(results: &[BundleResult]) -> String {
         };
         let _ = writeln!(
             s,
-            "| {} | {} | {} | {} | {:.1}% | {} | {} | {} |",
+            "| {} | {} | {} | {} | {:.1}% | {} | {} | {} | {} |",
             r.scene,
             r.view,
             r.kind,
@@ -649,7 +698,8 @@ fn bundle_report(results: &[BundleResult]) -> String {
             100.0 * r.hit_share,
             cells.join(" | "),
             over("rt-bvh wide bundles", "rt-bvh wide"),
-            best_embree(r),
+            best_embree(r, "rt-bvh wide bundles"),
+            best_embree(r, "rt-bvh wide image"),
         );
     }
     s

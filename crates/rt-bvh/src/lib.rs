@@ -619,6 +619,7 @@ impl<P: Primitive> Bvh<P> {
         &self,
         rays: &[Ray],
         slots: usize,
+        order: Option<&[u32]>,
         stats: &mut S,
         mut answer: impl FnMut(usize, Option<Hit>),
     ) {
@@ -634,9 +635,10 @@ impl<P: Primitive> Bvh<P> {
             }
             Tree::Binary { nodes, items } if rays.len() > 1 && !items.ids.is_empty() => {
                 let bounds = self.root_bounds();
-                rt_simd::bundle::walk_groups::<S, ANY>(
+                rt_simd::bundle::walk_groups_ordered::<S, ANY>(
                     rays,
                     slots,
+                    order,
                     stats,
                     |ray, stats| rt_simd::bundle::single::<_, S, ANY>(self, ray, stats),
                     |b| b.route(&bounds, coherent),
@@ -652,17 +654,20 @@ impl<P: Primitive> Bvh<P> {
                 return;
             }
             _ => {
-                for (slot, ray) in rays.iter().enumerate() {
-                    stats.single_ray();
-                    answer(slot, rt_simd::bundle::single::<_, S, ANY>(self, ray, stats));
+                for slot in rt_simd::bundle::slots_of(rays.len(), order) {
+                    if let Some(ray) = rays.get(slot) {
+                        stats.single_ray();
+                        answer(slot, rt_simd::bundle::single::<_, S, ANY>(self, ray, stats));
+                    }
                 }
                 return;
             }
         };
         let bounds = self.root_bounds();
-        rt_simd::bundle::walk_groups::<S, ANY>(
+        rt_simd::bundle::walk_groups_ordered::<S, ANY>(
             rays,
             slots,
+            order,
             stats,
             |ray, stats| rt_simd::bundle::single::<_, S, ANY>(self, ray, stats),
             |b| b.route(&bounds, coherent),
@@ -921,7 +926,33 @@ impl<P: Primitive> Accel for Bvh<P> {
             }
             return;
         }
-        self.bundle_query::<S, false>(rays, out.len(), stats, |slot, hit| out[slot] = hit);
+        self.bundle_query::<S, false>(rays, out.len(), None, stats, |slot, hit| out[slot] = hit);
+    }
+
+    #[inline]
+    fn intersect_bundle_ordered_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        order: &[u32],
+        out: &mut [Option<Hit>],
+        stats: &mut S,
+    ) {
+        self.bundle_query::<S, false>(rays, out.len(), Some(order), stats, |slot, hit| {
+            out[slot] = hit
+        });
+    }
+
+    #[inline]
+    fn occluded_bundle_ordered_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        order: &[u32],
+        out: &mut [bool],
+        stats: &mut S,
+    ) {
+        self.bundle_query::<S, true>(rays, out.len(), Some(order), stats, |slot, hit| {
+            out[slot] = hit.is_some()
+        });
     }
 
     #[inline]
@@ -931,7 +962,7 @@ impl<P: Primitive> Accel for Bvh<P> {
             *slot = self.occluded_with(ray, stats);
             return;
         }
-        self.bundle_query::<S, true>(rays, out.len(), stats, |slot, hit| {
+        self.bundle_query::<S, true>(rays, out.len(), None, stats, |slot, hit| {
             out[slot] = hit.is_some()
         });
     }

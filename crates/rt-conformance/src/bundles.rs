@@ -82,8 +82,10 @@ pub fn same_bits(a: Option<Hit>, b: Option<Hit>) -> bool {
 /// [`bundle_orders`] and in slices whose lengths cycle through [`BUNDLE_SIZES`] (upwards and
 /// downwards), exactly as its single-ray
 /// queries do (the same bits, [`same_bits`]); that counting events changes no answer; and that
-/// slices of unequal lengths answer as many rays as both have and leave the rest alone. With
-/// `any` false, only the closest-hit queries are checked.
+/// slices of unequal lengths answer as many rays as both have and leave the rest alone; and
+/// that the ordered bundle queries answer the rays an order lists in their own slots and leave
+/// the others alone. With `any` false, only the closest-hit queries are checked (the ordered
+/// occlusion query is checked either way).
 ///
 /// # Errors
 /// The first answer that differs, with its ray, the order and the slice length.
@@ -150,7 +152,74 @@ pub(crate) fn compare_bundles_probed<A: Accel>(
             }
         }
     }
-    counted_and_uneven(accel, rays, any, probe)
+    counted_and_uneven(accel, rays, any, probe)?;
+    ordered(accel, rays, any, probe)
+}
+
+/// The ordered bundle queries ([`Accel::intersect_bundle_ordered_with`]) answer each ray an
+/// order lists in its own slot, as the single queries do, and leave every other slot alone:
+/// for every ray shuffled, for every other ray backwards (the others' slots untouched), and
+/// with entries past the rays, which are ignored.
+fn ordered<A: Accel>(accel: &A, rays: &[Ray], any: bool, probe: &Probe) -> Result<(), String> {
+    let name = A::NAME;
+    let Some(first) = rays.first() else {
+        return Ok(());
+    };
+    probe.bundle(first, rays.len());
+    let n = rays.len() as u32;
+    let single: Vec<Option<Hit>> = rays.iter().map(|r| accel.intersect(r)).collect();
+    let blocked: Vec<bool> = rays.iter().map(|r| accel.occluded(r)).collect();
+    let mut rng = Rng::new(0x0d3e_0d3e);
+    let mut shuffled: Vec<u32> = (0..n).collect();
+    for i in (1..shuffled.len()).rev() {
+        shuffled.swap(i, rng.below(i as u32 + 1) as usize);
+    }
+    let every_other: Vec<u32> = (0..n).rev().step_by(2).collect();
+    let past: Vec<u32> = (0..n).flat_map(|i| [i, n + i, u32::MAX]).collect();
+    // A slot no entry lists keeps this.
+    let marker = Some(Hit {
+        prim: 7,
+        t: -1.0,
+        u: 0.0,
+        v: 0.0,
+    });
+    for (what, order) in [
+        ("every ray, shuffled", shuffled),
+        ("every other ray, backwards", every_other),
+        ("every ray, with entries past the rays", past),
+    ] {
+        let mut listed = vec![false; rays.len()];
+        for &i in order.iter().filter(|&&i| i < n) {
+            listed[i as usize] = true;
+        }
+        let mut hits = vec![marker; rays.len()];
+        accel.intersect_bundle_ordered_with(rays, &order, &mut hits, &mut NoStats);
+        let want = |i: usize| if listed[i] { single[i] } else { marker };
+        if let Some(i) = (0..rays.len()).find(|&i| !same_bits(hits[i], want(i))) {
+            return Err(format!(
+                "{name}: intersect_bundle_ordered_with ({what}) gives {:?} in slot {i} where it \
+                 should hold {:?}, for ray {}",
+                hits[i],
+                want(i),
+                rays[i].to_rust()
+            ));
+        }
+        if any {
+            // Every slot starts as the opposite of its answer.
+            let mut got: Vec<bool> = blocked.iter().map(|&b| !b).collect();
+            accel.occluded_bundle_ordered_with(rays, &order, &mut got, &mut NoStats);
+            if let Some(i) = (0..rays.len()).find(|&i| got[i] != (blocked[i] == listed[i])) {
+                return Err(format!(
+                    "{name}: occluded_bundle_ordered_with ({what}) gives {} in slot {i} where it \
+                     should hold {}, for ray {}",
+                    got[i],
+                    blocked[i] == listed[i],
+                    rays[i].to_rust()
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Counting changes no answer, and unequal slices answer as many rays as both have.

@@ -280,6 +280,44 @@ pub trait Accel: Sized + Send + Sync {
         occluded_each(self, rays, out, stats);
     }
 
+    /// [`intersect_bundle_with`](Accel::intersect_bundle_with) for the rays `order` lists, taken
+    /// in its order: bundles are made of rays that come together in `order`, and the answer of
+    /// ray `order[k]` goes to `out[order[k]]`. Entries at or past the shorter slice's length
+    /// are ignored, and slots no entry names are left alone. This is how
+    /// [`bundle::intersect_image`](crate::bundle::intersect_image) traces rays that come in
+    /// image order by tiles, without moving them.
+    ///
+    /// Every answer is the single ray's, as for `intersect_bundle_with`. The default gathers
+    /// the rays a few hundred at a time and answers them with `intersect_bundle_with`; a
+    /// structure whose bundles gather the rays themselves overrides it.
+    #[inline]
+    fn intersect_bundle_ordered_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        order: &[u32],
+        out: &mut [Option<Hit>],
+        stats: &mut S,
+    ) {
+        let gather = |r: &[Ray], o: &mut [Option<Hit>], s: &mut S| {
+            self.intersect_bundle_with(r, o, s);
+        };
+        in_order(rays, order, out, stats, gather);
+    }
+
+    /// [`occluded_bundle_with`](Accel::occluded_bundle_with) for the rays `order` lists, in its
+    /// order, as [`intersect_bundle_ordered_with`](Accel::intersect_bundle_ordered_with).
+    #[inline]
+    fn occluded_bundle_ordered_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        order: &[u32],
+        out: &mut [bool],
+        stats: &mut S,
+    ) {
+        let gather = |r: &[Ray], o: &mut [bool], s: &mut S| self.occluded_bundle_with(r, o, s);
+        in_order(rays, order, out, stats, gather);
+    }
+
     /// [`intersect_bundle_with`](Accel::intersect_bundle_with), uncounted.
     ///
     /// ```
@@ -492,6 +530,39 @@ pub fn intersect_each<A: Accel, S: Stats>(
     }
 }
 
+/// The default ordered bundle queries: the rays `order` lists (those within both slices),
+/// gathered a few hundred at a time in its order, answered by `trace`, each answer written to
+/// its ray's slot.
+fn in_order<T: Copy + Default, S: Stats>(
+    rays: &[Ray],
+    order: &[u32],
+    out: &mut [T],
+    stats: &mut S,
+    mut trace: impl FnMut(&[Ray], &mut [T], &mut S),
+) {
+    const GATHER: usize = 256;
+    let n = rays.len().min(out.len());
+    let mut ids = Vec::with_capacity(GATHER);
+    let mut gathered = Vec::with_capacity(GATHER);
+    let mut answers = [T::default(); GATHER];
+    let mut listed = order
+        .iter()
+        .map(|&i| i as usize)
+        .filter(|&i| i < n)
+        .peekable();
+    while listed.peek().is_some() {
+        ids.clear();
+        ids.extend(listed.by_ref().take(GATHER));
+        gathered.clear();
+        gathered.extend(ids.iter().map(|&i| rays[i]));
+        let answers = &mut answers[..ids.len()];
+        trace(&gathered, answers, stats);
+        for (&i, &a) in ids.iter().zip(answers.iter()) {
+            out[i] = a;
+        }
+    }
+}
+
 /// The default bundle queries' loop: [`Accel::occluded_with`] for each ray into the same slot of
 /// `out` (as many as both have), each counted as a ray traced singly.
 pub fn occluded_each<A: Accel, S: Stats>(accel: &A, rays: &[Ray], out: &mut [bool], stats: &mut S) {
@@ -510,6 +581,7 @@ pub fn occluded_each<A: Accel, S: Stats>(accel: &A, rays: &[Ray], out: &mut [boo
 /// | `build` | [`build`](Accel::build), building from the slice as from any geometry | the structure's [`build_from`](Accel::build_from) (give `build_from`) |
 /// | `ray` | [`ray_query`](Accel::ray_query) | `fn(&self, &Ray, &mut Q, &mut S)` |
 /// | `bundle` | [`intersect_bundle_with`](Accel::intersect_bundle_with), [`occluded_bundle_with`](Accel::occluded_bundle_with) | `fn::<S, const ANY: bool>(&self, rays: &[Ray], slots: usize, &mut S, answer: impl FnMut(usize, Option<Hit>))`, answering `Some` for a blocked ray when `ANY` |
+/// | `ordered_bundle` | the same and their `_ordered_with` forms ([`intersect_bundle_ordered_with`](Accel::intersect_bundle_ordered_with)) | the same with `order: Option<&[u32]>` after `slots`: the rays it lists, in its order, when given |
 /// | `ball` | [`ball_query`](Accel::ball_query) | `fn(&self, &mut Q, &mut S)` |
 /// | `boxes` | [`box_query`](Accel::box_query) | `fn(&self, &mut Q, &mut S) -> ControlFlow<()>` |
 /// | `regions` | [`regions`](Accel::regions) | `fn(&self, &mut dyn FnMut(Region))` |
@@ -584,6 +656,48 @@ macro_rules! accel_walks {
             stats: &mut S,
         ) {
             self.$method::<S, true>(rays, out.len(), stats, |slot, hit| {
+                out[slot] = hit.is_some()
+            });
+        }
+    };
+    (@ordered_bundle $method:ident) => {
+        fn intersect_bundle_with<S: $crate::Stats>(
+            &self,
+            rays: &[$crate::Ray],
+            out: &mut [Option<$crate::Hit>],
+            stats: &mut S,
+        ) {
+            self.$method::<S, false>(rays, out.len(), None, stats, |slot, hit| out[slot] = hit);
+        }
+        fn occluded_bundle_with<S: $crate::Stats>(
+            &self,
+            rays: &[$crate::Ray],
+            out: &mut [bool],
+            stats: &mut S,
+        ) {
+            self.$method::<S, true>(rays, out.len(), None, stats, |slot, hit| {
+                out[slot] = hit.is_some()
+            });
+        }
+        fn intersect_bundle_ordered_with<S: $crate::Stats>(
+            &self,
+            rays: &[$crate::Ray],
+            order: &[u32],
+            out: &mut [Option<$crate::Hit>],
+            stats: &mut S,
+        ) {
+            self.$method::<S, false>(rays, out.len(), Some(order), stats, |slot, hit| {
+                out[slot] = hit
+            });
+        }
+        fn occluded_bundle_ordered_with<S: $crate::Stats>(
+            &self,
+            rays: &[$crate::Ray],
+            order: &[u32],
+            out: &mut [bool],
+            stats: &mut S,
+        ) {
+            self.$method::<S, true>(rays, out.len(), Some(order), stats, |slot, hit| {
                 out[slot] = hit.is_some()
             });
         }

@@ -53,7 +53,8 @@
 //! [`Accel::intersect_bundle`] and [`Accel::occluded_bundle`] answer a slice of rays, each
 //! exactly as the single-ray query would; structures that trace coherent rays together (a
 //! camera's tiles, a light's shadow rays) override them with rt-simd's bundles.
-//! [`bundle::intersect_frame`] traces a whole frame that way on all threads. See the
+//! [`bundle::intersect_frame`] traces a whole frame that way on all threads, and
+//! [`bundle::intersect_image`] a frame whose rays come in image order, bundled by tiles. See the
 //! [`bundle`] module.
 //!
 //! # Closest points

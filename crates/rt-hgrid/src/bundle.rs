@@ -22,13 +22,15 @@ impl<P: Primitive> HGrid<P> {
         &self,
         rays: &[Ray],
         slots: usize,
+        order: Option<&[u32]>,
         stats: &mut S,
         answer: impl FnMut(usize, Option<Hit>),
     ) {
         let top = &self.levels[0].shape;
-        rt_simd::bundle::walk_groups::<S, ANY>(
+        rt_simd::bundle::walk_groups_ordered::<S, ANY>(
             rays,
             slots,
+            order,
             stats,
             |ray, stats| rt_simd::bundle::single::<_, S, ANY>(self, ray, stats),
             |b| b.route(&top.bounds(), |b| !self.refs.is_empty() && coherent(top, b)),

@@ -256,7 +256,7 @@ impl<P: Primitive> Accel for HGrid<P> {
     rt_core::accel_walks!(
         build: build_from,
         ray: query,
-        bundle: bundle_query,
+        ordered_bundle: bundle_query,
         ball: ball,
         boxes: box_cells,
         regions: walk_regions,

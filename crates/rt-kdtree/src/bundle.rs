@@ -53,12 +53,14 @@ impl<P: Primitive> KdTree<P> {
         &self,
         rays: &[Ray],
         slots: usize,
+        order: Option<&[u32]>,
         stats: &mut S,
         answer: impl FnMut(usize, Option<Hit>),
     ) {
-        rt_simd::bundle::walk_groups::<S, ANY>(
+        rt_simd::bundle::walk_groups_ordered::<S, ANY>(
             rays,
             slots,
+            order,
             stats,
             |ray, stats| rt_simd::bundle::single::<_, S, ANY>(self, ray, stats),
             |b| {

@@ -433,7 +433,7 @@ impl<P: Primitive> Accel for KdTree<P> {
     rt_core::accel_walks!(
         build: build_from,
         ray: single,
-        bundle: bundle_query,
+        ordered_bundle: bundle_query,
         ball: ball,
         boxes: box_cells,
         regions: walk_regions,

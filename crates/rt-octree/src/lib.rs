@@ -321,7 +321,7 @@ impl<P: Primitive> Accel for Octree<P> {
     rt_core::accel_walks!(
         build: build_from,
         ray: query,
-        bundle: bundle_query,
+        ordered_bundle: bundle_query,
         ball: ball,
         boxes: box_cells,
         regions: walk_regions,

@@ -415,6 +415,48 @@ fn slice_queries_that_differ_from_single_ones_fail() {
     );
 }
 
+/// A structure whose ordered bundle queries answer in the order's positions instead of the
+/// rays' own slots (`out[k]` for the ray `order[k]`). Everything else is brute force's.
+struct MisplacesOrdered(BruteForce<Triangle>);
+
+impl Accel for MisplacesOrdered {
+    forward_to_brute_force!();
+    const NAME: &'static str = "misplaces-ordered";
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        self.0.ray_query(ray, query, stats);
+    }
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.ball_query(query, stats);
+    }
+    fn intersect_bundle_ordered_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        order: &[u32],
+        out: &mut [Option<Hit>],
+        stats: &mut S,
+    ) {
+        for (k, &i) in order.iter().enumerate() {
+            if let (Some(ray), Some(slot)) = (rays.get(i as usize), out.get_mut(k)) {
+                *slot = self.0.intersect_with(ray, stats);
+            }
+        }
+    }
+}
+
+/// The bundle check catches ordered bundle queries that write an answer to the wrong slot.
+#[test]
+fn ordered_bundle_queries_that_misplace_answers_fail() {
+    let s = scene("shared_edge");
+    let brute = BruteForce::build(&s.triangles, &());
+    rt_conformance::compare_bundles(&brute, &s.rays, true).unwrap();
+    let e = rt_conformance::compare_bundles(&MisplacesOrdered(brute), &s.rays, true)
+        .expect_err("a misplaced answer must be caught");
+    assert!(
+        e.starts_with("misplaces-ordered: intersect_bundle_ordered_with (every ray, shuffled)"),
+        "{e}"
+    );
+}
+
 /// A structure whose bundle traversal drops a lane: the last lane of every bundle of two or more
 /// rays gets no hit (and counts as not occluded). Single rays and rays that travel alone are
 /// brute force's.

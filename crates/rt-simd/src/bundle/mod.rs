@@ -10,7 +10,9 @@
 //! Rays a bundle cannot carry (invalid rays, and rays with a zero or tiny direction component,
 //! whose reciprocal is infinite) are handed back one by one, to be answered by the single-ray
 //! query, which answers invalid rays at once, as it always does. [`walk_groups`] is the frame
-//! every structure's bundle queries share: sorting, routing, single-ray fallback, answers.
+//! every structure's bundle queries share: sorting, routing, single-ray fallback, answers;
+//! [`walk_groups_ordered`] the same for rays taken in a given order (the ordered bundle
+//! queries, which gather each run of rays an order lists).
 //!
 //! At the leaves, [`Lanes`] tests one primitive against many lanes, eight per vector step
 //! with AVX2 and sixteen with AVX-512 when the CPU has them, each lane with exactly its
@@ -22,7 +24,9 @@ mod walk;
 
 pub use brute::BundledBruteForce;
 pub use lanes::{LANE_MAILBOX, LaneMailbox, Lanes, narrow, test_primitives};
-pub use walk::{BLOCKED, Group, Route, for_each_bundle, single, walk_groups};
+pub use walk::{
+    BLOCKED, Group, Route, for_each_bundle, single, slots_of, walk_groups, walk_groups_ordered,
+};
 
 use crate::Isa;
 #[cfg(target_arch = "x86_64")]

@@ -140,24 +140,65 @@ pub fn walk_groups<S: Stats, const ANY: bool>(
     rays: &[Ray],
     slots: usize,
     stats: &mut S,
+    single: impl FnMut(&Ray, &mut S) -> Option<Hit>,
+    route: impl Fn(&Bundle) -> Route,
+    walk: impl FnMut(&Bundle, &mut Lanes, &mut S) -> u64,
+    answer: impl FnMut(usize, Option<Hit>),
+) {
+    walk_groups_ordered::<S, ANY>(rays, slots, None, stats, single, route, walk, answer);
+}
+
+/// [`walk_groups`] for the rays `order` lists (entries at or past `slots` and the rays'
+/// length ignored), bundled in its order, or for the first `slots` rays with `None`: what the
+/// ordered bundle queries ([`Accel::intersect_bundle_ordered_with`]) run on. Each run of
+/// [`BUNDLE_LANES`] entries is gathered and bundled as a run of the slice would be, and the
+/// next run's rays are asked into the caches as soon as this one is gathered.
+#[allow(clippy::too_many_arguments)]
+pub fn walk_groups_ordered<S: Stats, const ANY: bool>(
+    rays: &[Ray],
+    slots: usize,
+    order: Option<&[u32]>,
+    stats: &mut S,
     mut single: impl FnMut(&Ray, &mut S) -> Option<Hit>,
     route: impl Fn(&Bundle) -> Route,
     walk: impl FnMut(&Bundle, &mut Lanes, &mut S) -> u64,
     mut answer: impl FnMut(usize, Option<Hit>),
 ) {
     let rays = &rays[..rays.len().min(slots)];
-    if rays.len() < 2 {
+    let kept;
+    let order = match order {
+        // Entries past the rays are ignored (checked once here, so the runs index freely).
+        Some(o) if o.iter().any(|&i| i as usize >= rays.len()) => {
+            kept = o
+                .iter()
+                .copied()
+                .filter(|&i| (i as usize) < rays.len())
+                .collect::<Vec<u32>>();
+            Some(&kept[..])
+        }
+        o => o,
+    };
+    if order.map_or(rays.len(), <[u32]>::len) < 2 {
         // One ray (or none) cannot make a bundle: straight to its single walk.
-        for (slot, ray) in rays.iter().enumerate() {
-            answer(slot, alone(&mut single, ray, stats));
+        for slot in slots_of(rays.len(), order) {
+            answer(slot, alone(&mut single, &rays[slot], stats));
         }
         return;
     }
     let isa = Isa::detect();
     isa.run(
         #[inline(always)]
-        move || walk_runs::<S, ANY>(isa, rays, stats, single, route, walk, answer),
+        move || walk_runs::<S, ANY>(isa, rays, order, stats, single, route, walk, answer),
     );
+}
+
+/// The slots a bundle query answers, in the order it takes them: `0..len`, or `order`'s.
+pub fn slots_of(len: usize, order: Option<&[u32]>) -> impl Iterator<Item = usize> + '_ {
+    let (all, listed) = match order {
+        None => (0..len, None),
+        Some(o) => (0..0, Some(o.iter().map(|&i| i as usize))),
+    };
+    all.chain(listed.into_iter().flatten())
 }
 
 /// A ray traced singly, counted as one.
@@ -173,9 +214,11 @@ fn alone<S: Stats>(
 
 /// The body of [`walk_groups`], for two rays or more.
 #[inline(always)]
+#[allow(clippy::too_many_arguments)]
 fn walk_runs<S: Stats, const ANY: bool>(
     isa: Isa,
     rays: &[Ray],
+    order: Option<&[u32]>,
     stats: &mut S,
     mut single: impl FnMut(&Ray, &mut S) -> Option<Hit>,
     route: impl Fn(&Bundle) -> Route,
@@ -202,18 +245,48 @@ fn walk_runs<S: Stats, const ANY: bool>(
     const SKIP: u32 = 8;
     let mut bundler = Bundler::new(isa);
     let (mut backoff, mut skip) = (0, 0);
-    for (base, run) in rays.chunks(BUNDLE_LANES).enumerate() {
-        let base = base * BUNDLE_LANES;
+    // With an order, each run's rays are gathered here, and the next run's are asked into the
+    // caches as soon as this one is gathered, a whole walk ahead: the CPU cannot foresee loads
+    // from several places as it foresees a slice's. (Gathering the rays into a buffer before
+    // the call instead, `intersect_image`'s first form, read them in a pass of its own that
+    // waited on memory: teapot primary rays in image order 42.6 -> 38.5 Mrays/s, where this
+    // gives 46-49.)
+    // PERF: prefetching the next run's rays a line per lane while this run's answers are
+    // written, as for a slice, against right after this run's gather: the wide BVH's bundles
+    // through `intersect_image`, the teapot's primary rays in image order, one thread, private
+    // harness, Mrays/s, 42.4 43.1 -> 44.9 44.4; the bunny 31.2 29.7 -> 31.9 32.0.
+    let mut gathered = Vec::with_capacity(if order.is_some() { BUNDLE_LANES } else { 0 });
+    let listed = order.map_or(rays.len(), <[u32]>::len);
+    for base in (0..listed).step_by(BUNDLE_LANES) {
+        let end = (base + BUNDLE_LANES).min(listed);
+        // The run, and where the answer of its ray `k` goes.
+        let (run, ids) = match order {
+            None => (&rays[base..end], None),
+            Some(o) => {
+                let ids = &o[base..end];
+                gathered.clear();
+                gathered.extend(ids.iter().map(|&i| rays[i as usize]));
+                for &i in &o[end..(end + BUNDLE_LANES).min(o.len())] {
+                    // A ray's 44 bytes lie on at most two lines: the line of its start, and
+                    // that of the next ray's start (where its last byte is, or on the first).
+                    let i = i as usize;
+                    crate::prefetch(&rays[i..], 0, 1);
+                    crate::prefetch(&rays[i + 1..], 0, 1);
+                }
+                (&gathered[..], Some(ids))
+            }
+        };
+        let to_slot = |k: usize| ids.map_or(base + k, |ids| ids[k] as usize);
         if skip > 0 {
             skip -= 1;
             for (k, ray) in run.iter().enumerate() {
-                answer(base + k, alone(&mut single, ray, stats));
+                answer(to_slot(k), alone(&mut single, ray, stats));
             }
             continue;
         }
         if !may_cohere(run) {
             for (k, ray) in run.iter().enumerate() {
-                answer(base + k, alone(&mut single, ray, stats));
+                answer(to_slot(k), alone(&mut single, ray, stats));
             }
             continue;
         }
@@ -231,11 +304,13 @@ fn walk_runs<S: Stats, const ANY: bool>(
         // 51.9 -> 45.6, stadium 58.4 -> 48.9); two runs ahead, mixed (bunny 52.7 -> 51.0,
         // sphereflake 61.9 -> 59.3, stadium 56.8 -> 61.1); the answers' own lines asked for
         // ahead too, slower (bunny 56.1 -> 54.5, stadium 64.8 -> 61.8).
-        let ahead = rays.get(base + BUNDLE_LANES..).unwrap_or(&[]);
-        let ahead = &ahead[..ahead.len().min(BUNDLE_LANES)];
+        let ahead = match order {
+            None => &rays[end..(end + BUNDLE_LANES).min(rays.len())],
+            Some(_) => &[],
+        };
         bundler.run(
             run,
-            base,
+            0,
             #[inline(always)]
             |group| match group {
                 Group::Bundle(b) => match if b.len() > 1 { route(b) } else { Route::Singly } {
@@ -245,9 +320,10 @@ fn walk_runs<S: Stats, const ANY: bool>(
                         let left = walk(b, &mut lanes, stats);
                         for i in 0..b.len() {
                             prefetch_line(ahead, i);
-                            let slot = b.slot[i] as usize;
+                            let k = b.slot[i] as usize;
+                            let slot = to_slot(k);
                             if left >> i & 1 != 0 {
-                                answer(slot, alone(&mut single, &rays[slot], stats));
+                                answer(slot, alone(&mut single, &run[k], stats));
                             } else {
                                 // One call of `answer` per kind of answer, so that each
                                 // writes its fields straight into the caller's slot.
@@ -270,21 +346,19 @@ fn walk_runs<S: Stats, const ANY: bool>(
                     }
                     Route::Miss => {
                         walked = true;
-                        for (i, &slot) in b.slot[..b.len()].iter().enumerate() {
+                        for (i, &k) in b.slot[..b.len()].iter().enumerate() {
                             prefetch_line(ahead, i);
-                            answer(slot as usize, None);
+                            answer(to_slot(k as usize), None);
                         }
                     }
                     Route::Singly => {
-                        for &slot in &b.slot[..b.len()] {
-                            answer(
-                                slot as usize,
-                                alone(&mut single, &rays[slot as usize], stats),
-                            );
+                        for &k in &b.slot[..b.len()] {
+                            let k = k as usize;
+                            answer(to_slot(k), alone(&mut single, &run[k], stats));
                         }
                     }
                 },
-                Group::Single(slot, ray) => answer(slot, alone(&mut single, ray, stats)),
+                Group::Single(k, ray) => answer(to_slot(k), alone(&mut single, ray, stats)),
             },
         );
         if walked {

@@ -140,21 +140,20 @@ pub fn zip_chunks_mut<T: Sync, U: Send>(
 ) {
     let n = input.len().min(out.len());
     let (input, out) = (&input[..n], &mut out[..n]);
+    // A pool of one thread would only move the work to its thread: the calling thread does it.
     #[cfg(feature = "parallel")]
-    {
+    if threads() > 1 {
         use rayon::prelude::*;
         input
             .par_chunks(size)
             .zip(out.par_chunks_mut(size))
             .for_each(|(i, o)| f(i, o));
+        return;
     }
-    #[cfg(not(feature = "parallel"))]
-    {
-        input
-            .chunks(size)
-            .zip(out.chunks_mut(size))
-            .for_each(|(i, o)| f(i, o));
-    }
+    input
+        .chunks(size)
+        .zip(out.chunks_mut(size))
+        .for_each(|(i, o)| f(i, o));
 }
 
 /// Folds chunks of `size` items into accumulators made by `init` and combines those with
@@ -182,16 +181,15 @@ pub fn fold_chunks<T: Sync, A: Send>(
 
 /// Calls `f` on every item, in parallel pieces of at least `min_len` items.
 pub fn for_each_mut<T: Send>(items: &mut [T], min_len: usize, f: impl Fn(&mut T) + Sync + Send) {
+    // A pool of one thread would only move the work to its thread: the calling thread does it.
     #[cfg(feature = "parallel")]
-    {
+    if threads() > 1 {
         use rayon::prelude::*;
         items.par_iter_mut().with_min_len(min_len).for_each(f);
+        return;
     }
-    #[cfg(not(feature = "parallel"))]
-    {
-        let _ = min_len;
-        items.iter_mut().for_each(f);
-    }
+    let _ = min_len;
+    items.iter_mut().for_each(f);
 }
 
 /// Sorts `items` (unstable: equal items may change places, which for a total order on distinct

@@ -131,7 +131,8 @@ pub fn map_chunks_mut_indexed<T: Send, R: Send>(
 }
 
 /// `f(input_chunk, output_chunk)` for matching chunks of `size` items of `input` and `out` (as
-/// many items as both have; the last chunk may be shorter).
+/// many items as both have; the last chunk may be shorter). In order on the calling thread when
+/// rayon's current pool has one thread.
 pub fn zip_chunks_mut<T: Sync, U: Send>(
     input: &[T],
     out: &mut [U],
@@ -179,7 +180,8 @@ pub fn fold_chunks<T: Sync, A: Send>(
     }
 }
 
-/// Calls `f` on every item, in parallel pieces of at least `min_len` items.
+/// Calls `f` on every item, in parallel pieces of at least `min_len` items (in order on the
+/// calling thread when rayon's current pool has one thread).
 pub fn for_each_mut<T: Send>(items: &mut [T], min_len: usize, f: impl Fn(&mut T) + Sync + Send) {
     // A pool of one thread would only move the work to its thread: the calling thread does it.
     #[cfg(feature = "parallel")]

@@ -195,15 +195,17 @@ impl Shear {
     #[inline]
     pub fn new(dir: Vec3) -> Self {
         let a = dir.abs();
-        let kz = if a.x >= a.y && a.x >= a.z {
-            0
-        } else if a.y >= a.z {
-            1
-        } else {
-            2
-        };
-        let kx = if kz == 2 { 0 } else { kz + 1 };
-        let ky = if kx == 2 { 0 } else { kx + 1 };
+        // The largest component, x on ties with y or z and y on ties with z, chosen without
+        // branches: for scattered rays they go either way. PERF: rt-bvh's wide walk, Intel
+        // Emerald Rapids, private harness, three alternating runs, incoherent rays, Mrays/s:
+        // woody 12.61 12.61 12.58 -> 13.17 13.24 13.32, the bunny 5.50 5.44 5.39 -> 5.58 5.62
+        // 5.55, the teapot 6.00 5.99 5.88 -> 6.14 6.12 5.99, random soup 1.78 1.78 1.77 -> 1.83
+        // 1.83 1.82; primary and shadow rays within ±1%. (A table lookup for kx and ky instead
+        // of the shifts: primary rays 1% slower.)
+        let (x_largest, y_over_z) = ((a.x >= a.y) & (a.x >= a.z), a.y >= a.z);
+        let kz = usize::from(!x_largest) * (1 + usize::from(!y_over_z));
+        // The next two axes after kz, cyclically: two bits per kz in a constant.
+        let (kx, ky) = ((0b00_10_01 >> (2 * kz)) & 3, (0b01_00_10 >> (2 * kz)) & 3);
         // An array for the runtime axes, as in `intersect_sheared`.
         let d = dir.to_array();
         let (kx, ky) = if d[kz] < 0.0 { (ky, kx) } else { (kx, ky) };

@@ -579,14 +579,13 @@ impl<L: Leaves, S: Stats> WithLanes for WideRayInto<'_, L, S> {
 ///
 /// Each visit tests all children of a node with one slab test, which the next round of the loop
 /// reads: the root's is made first, the visits of nodes popped or chosen make the others.
-/// Closest hit: the children
-/// entered are sorted by entry distance; the nearest is visited next and the others pushed with
-/// their distances, farthest first, and skipped when popped if they start beyond the query's
-/// far end (allowing [`SLAB_FAR_SCALE`], as the box test does), which for a closest hit is the
-/// best hit found meanwhile. Every query but occlusion walks this way. Occlusion
-/// ([`RayQuery::OCCLUSION`]): no sorting (measured slower: it found hits no sooner); the
-/// children are pushed in lane order, and the first hit ends the walk. Leaves are tested when
-/// popped, like nodes.
+/// Closest hit: the children entered are sorted by entry distance; the nearest is visited next
+/// and the others pushed with their distances, farthest first, and skipped when popped if they
+/// start beyond the query's far end (allowing [`SLAB_FAR_SCALE`], as the box test does), which
+/// for a closest hit is the best hit found meanwhile. Every query but occlusion walks this way.
+/// Occlusion ([`RayQuery::OCCLUSION`]): no sorting (measured slower: it found hits no sooner);
+/// the children are pushed in lane order, and the first hit ends the walk. Leaves are tested
+/// when popped, like nodes.
 #[inline(always)]
 pub(crate) fn wide<X: Wide, L: Leaves, S: Stats, Q: RayQuery>(
     simd: X,

@@ -679,12 +679,20 @@ pub(crate) fn wide<X: Wide, L: Leaves, S: Stats, Q: RayQuery>(
                 n += 1;
             }
             sort_descending(&mut k, n);
-            let hits = k.map(|k| (k as u32, f32::from_bits((k >> 32) as u32)));
-            for &h in &hits[..n - 1] {
+            // Each key decoded where it is used: decoding all eight slots into an array first
+            // cost instructions on every sorted node. PERF: AMD Zen 3, rt-bvh ÷ Embree 3 medium
+            // in one process (9 interleaved passes, geometric mean of three runs over the bunny,
+            // the teapot, the rocker arm and the sphereflake): primary 0.890 -> 0.918,
+            // incoherent 0.867 -> 0.878 (shadow rays, which do not sort, 0.947 -> 0.948);
+            // 811 -> 801 instructions per bunny primary ray (cachegrind).
+            let entry = |k: u64| (k as u32, f32::from_bits((k >> 32) as u32));
+            for &key in &k[..n - 1] {
+                let h = entry(key);
                 stack.push(h);
                 report_push(stats, ChildRef(h.0), h.1);
             }
-            next = Some((ChildRef(hits[n - 1].0), hits[n - 1].1));
+            let (c, t) = entry(k[n - 1]);
+            next = Some((ChildRef(c), t));
         }
         // Visit `next`, or what the stack holds: leaves until a node is reached, whose
         // children's slab test feeds the next round.

@@ -147,12 +147,28 @@ impl Ray {
     /// no node visited: a NaN direction or an origin at 10³⁰ must not walk the whole tree.
     #[inline]
     pub fn is_valid(&self) -> bool {
-        self.origin.abs().cmple(Vec3::splat(Self::MAX_ORIGIN)).all()
-            && self.dir.is_finite()
-            && Self::DIR_RANGE.contains(&self.dir.abs().max_element())
-            && self.t_min >= 0.0
-            && self.t_min.is_finite()
-            && self.t_min <= self.t_max
+        // Every condition is evaluated and they are combined with `&`, not `&&`: fewer branches
+        // at the start of every query. A comparison with NaN is false, so a NaN anywhere fails,
+        // and a component at most the range's top is finite.
+        // PERF: AMD Zen 3 (EPYC, family 25 model 1), rt-bvh single rays ÷ Embree 3 medium in one
+        // process (9 interleaved passes, geometric mean of three runs over six scenes each:
+        // the bunny, the teapot, the rocker arm, the sphereflake, the cow, homer; then the
+        // beetle, random soup, the terrain, fandisk, spot, the teapot in a stadium), with the
+        // walk's change of the same commit (`traverse.rs`): primary 0.922 -> 0.980 and 0.894 ->
+        // 0.956, incoherent 0.887 -> 0.906 and 0.890 -> 0.913, shadow 0.974 -> 0.999 and 0.996
+        // -> 1.051. Instructions per bunny primary ray (cachegrind) 801 -> 794 for this alone.
+        let (o, d) = (self.origin.abs(), self.dir.abs());
+        let (lo, hi) = (*Self::DIR_RANGE.start(), *Self::DIR_RANGE.end());
+        (o.x <= Self::MAX_ORIGIN)
+            & (o.y <= Self::MAX_ORIGIN)
+            & (o.z <= Self::MAX_ORIGIN)
+            & (d.x <= hi)
+            & (d.y <= hi)
+            & (d.z <= hi)
+            & ((d.x >= lo) | (d.y >= lo) | (d.z >= lo))
+            & (self.t_min >= 0.0)
+            & (self.t_min < f32::INFINITY)
+            & (self.t_min <= self.t_max)
     }
 
     /// Formats the ray as one line of a rays file (`ox oy oz dx dy dz tmin tmax`), with every
@@ -185,5 +201,60 @@ impl Ray {
                 format!("{:?}", self.t_max)
             }
         )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// [`Ray::is_valid`] as its documentation states it, condition by condition.
+    fn valid_by_definition(r: &Ray) -> bool {
+        r.origin.abs().cmple(Vec3::splat(Ray::MAX_ORIGIN)).all()
+            && r.dir.is_finite()
+            && Ray::DIR_RANGE.contains(&r.dir.abs().max_element())
+            && r.t_min >= 0.0
+            && r.t_min.is_finite()
+            && r.t_min <= r.t_max
+    }
+
+    /// The branch-free form agrees with the definition on every combination of the values at
+    /// and beside each limit (signed zeros, the range ends and the floats past them, infinities,
+    /// NaN) in every field.
+    #[test]
+    fn is_valid_agrees_with_its_definition_at_every_limit() {
+        let next = |x: f32| f32::from_bits(x.to_bits() + 1);
+        let before = |x: f32| f32::from_bits(x.to_bits() - 1);
+        let (m, lo, hi) = (
+            Ray::MAX_ORIGIN,
+            *Ray::DIR_RANGE.start(),
+            *Ray::DIR_RANGE.end(),
+        );
+        let (inf, nan) = (f32::INFINITY, f32::NAN);
+        let origins = [0.0, -1.0, m, -next(m), inf, nan];
+        let dirs = [0.0, -0.0, 1.0, lo, -before(lo), hi, next(hi), -inf, nan];
+        let ts = [0.0, -0.0, -1.0, 1.0, inf, nan];
+        let (mut valid, mut invalid) = (0, 0);
+        for o in origins.iter().flat_map(|&x| origins.map(|y| (x, y))) {
+            for &oz in &origins {
+                for d in dirs.iter().flat_map(|&x| dirs.map(|y| (x, y))) {
+                    for &dz in &dirs {
+                        for (t_min, t_max) in ts.iter().flat_map(|&a| ts.map(|b| (a, b))) {
+                            let origin = Vec3::new(o.0, o.1, oz);
+                            let dir = Vec3::new(d.0, d.1, dz);
+                            let r = Ray::with_interval(origin, dir, t_min, t_max);
+                            assert_eq!(r.is_valid(), valid_by_definition(&r), "{}", r.to_line());
+                            if r.is_valid() {
+                                valid += 1;
+                            } else {
+                                invalid += 1;
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // Both answers occur, so the comparison could fail either way.
+        assert!(valid > 0 && invalid > 0);
     }
 }

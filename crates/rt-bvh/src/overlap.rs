@@ -186,6 +186,9 @@ impl<'a, Q> WithCopies<'a, Q> {
         id: u32,
         mut offer: impl FnMut(&mut Q, u32) -> ControlFlow<()>,
     ) -> ControlFlow<()> {
+        if self.twins.is_empty() {
+            return ControlFlow::Continue(());
+        }
         let start = self.twins.partition_point(|&(stored, _)| stored < id);
         for &(_, copy) in self.twins[start..].iter().take_while(|&&(s, _)| s == id) {
             self.offered += 1;

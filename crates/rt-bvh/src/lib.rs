@@ -891,7 +891,10 @@ impl<P: Primitive> Accel for Bvh<P> {
         // every such query type, kernel set and statistics sink.
         // PERF: AMD Zen 3, rt-shootout's library (`cargo llvm-lines -p rt-shootout --lib`):
         // copies of the walk 510 -> 300, LLVM IR lines before inlining 1,267,784 -> 1,130,787,
-        // its build in the test profile 548 -> 349 CPU seconds.
+        // its build in the test profile 548 -> 349 CPU seconds. Speed unchanged: all hits,
+        // a filtered closest hit and one filtered through `dyn FnMut` on the bunny and the
+        // teapot, primary and incoherent rays, wrapped / unwrapped 1.01, 1.01 and 1.01
+        // (geometric means of three alternating runs, best of 5 passes).
         if Q::COPIES_CHANGE_NOTHING {
             self.query(ray, query, stats);
         } else {

@@ -8,8 +8,11 @@
 //!   repository root; `# exits N` after it says the status it must exit with (default 0);
 //! - `-o`/`--out` paths are redirected into a scratch folder, so a run writes nothing into the
 //!   repository;
-//! - a command `.ci/run` runs itself (`cargo xtask compare`, `cargo test --workspace`) is left
-//!   to CI.
+//! - a command `.ci/run` runs itself (`cargo test --workspace`) is left to CI.
+//!
+//! `cargo xtask ...` runs the xtask binary these tests were built with, the README's
+//! `cargo xtask compare` among them (CI runs it nowhere else); a test below checks that the
+//! `xtask` alias runs that package.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -227,6 +230,20 @@ fn check(
     }
 }
 
+/// `cargo xtask ARGS` runs this package's binary, optimised: the commands above run that binary
+/// directly, so they are what the alias runs.
+#[test]
+fn the_xtask_alias_runs_this_package_in_release() {
+    let config = std::fs::read_to_string(root().join(".cargo/config.toml")).unwrap();
+    let alias = config
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("xtask = "))
+        .expect("an `xtask` alias in .cargo/config.toml");
+    assert_eq!(alias, r#""run --release --package xtask --""#);
+    let manifest = std::fs::read_to_string(root().join("xtask/Cargo.toml")).unwrap();
+    assert!(manifest.contains("name = \"xtask\""), "{manifest}");
+}
+
 #[test]
 fn every_shown_command_runs() {
     let scratch = Path::new(env!("CARGO_TARGET_TMPDIR")).join("docs-commands");
@@ -362,12 +379,27 @@ fn the_readme_is_a_front_page() {
         "README.md is {} bytes",
         readme.len()
     );
-    // The two set-up commands, exactly as `.ci/run` runs them.
-    let ci = ci_commands();
+    // The two set-up commands. `.ci/run` runs the test command exactly as shown; the shootout
+    // runs as shown in `every_shown_command_runs`, which leaves to CI only what CI runs.
     for command in ["cargo xtask compare", "cargo test --workspace"] {
         assert!(readme.contains(&format!("{command} ")), "{command}");
-        assert!(ci.contains(command), ".ci/run does not run `{command}`");
     }
+    let ci = ci_commands();
+    assert!(
+        ci.contains("cargo test --workspace"),
+        ".ci/run does not run `cargo test --workspace`"
+    );
+    let shown = commands(&root().join("README.md"));
+    assert!(
+        shown
+            .iter()
+            .any(|s| s.words.join(" ") == "cargo xtask compare" && s.status == 0),
+        "the README shows no `cargo xtask compare` line: {shown:?}"
+    );
+    assert!(
+        !ci.contains("cargo xtask compare"),
+        "`cargo xtask compare` runs in the tests; .ci/run need not build it again"
+    );
 }
 
 #[test]

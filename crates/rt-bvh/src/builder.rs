@@ -7,8 +7,9 @@
 //! is the binary tree collapsed, built without the binary tree in between.
 //!
 //! Parallelism (rayon): the binning of large sets is split into chunks whose bins are merged, and
-//! subtrees of many primitives are built concurrently into their own arrays, appended afterwards
-//! in the order a sequential build would write them. Bins merge exactly (minima, maxima and
+//! subtrees of many primitives are built concurrently into their own arrays, appended (moved,
+//! not copied) in the order a sequential build would write them, and copied into place once when
+//! the tree is finished. Bins merge exactly (minima, maxima and
 //! counts do not depend on the order they are combined in), and partitions run sequentially, so
 //! the tree is the same, byte for byte, whatever the number of threads.
 
@@ -214,6 +215,17 @@ const PAR_BIN_MIN: usize = 1 << 15;
 const PAR_BIN_CHUNK: usize = 1 << 13;
 /// Subtrees at least this large are built as parallel tasks.
 const PAR_SUBTREE_MIN: usize = 1 << 11;
+/// A wide node whose children hold at least this many references together builds them as
+/// parallel tasks, however they divide them.
+// PERF: the rule was "at least two children of `PAR_SUBTREE_MIN`", under which up to eight
+// children of 2047 references (16k, a quarter of the bunny) were built on one thread while the
+// other waited: perf's samples put one thread alone for 24% of a 2-thread bunny build, 7% with
+// this rule. With this rule alone the extra subtrees' copies ate the gain (terrain 1.01x,
+// sphereflake 1.025x the time); appending them without copying (`WideOut`) keeps the CPU time
+// of the old rule. Both: 2-thread bunny builds 0.95x the time (farm-bench, median of 21 pairs
+// of processes of 150 builds; AMD Zen 3), terrain and sphereflake 0.98-1.01x, one thread
+// 1.01x; 2048 or 1024 here measured the same as 4096.
+const PAR_WIDE_MIN: usize = 1 << 12;
 
 /// Builds the tree for `params`. Each set costs O(n) for its binning and partition and there are
 /// O(log N) levels for balanced splits, so the build is O(N log N); the depth is bounded by
@@ -325,17 +337,10 @@ fn build_refs(prims: &dyn Triangles, refs: Refs, params: &BvhParams, parallel: b
         );
         if root_ref.is_leaf() {
             // A tree of one leaf still starts at a node, so traversal always starts at node 0.
-            let mut node = WideNode::EMPTY;
-            set_child(&mut node, 0, &root.bounds, root_ref);
-            o.nodes.push(node);
+            let slot = o.reserve_node();
+            set_child(o.node_mut(slot), 0, &root.bounds, root_ref);
         }
-        // A sequential build grows both arrays by doubling; up to half of each would be unused
-        // capacity for the tree's lifetime (the bunny's wide tree took 7.0 MiB on 1 thread and
-        // 3.9 MiB on 2). Shrinking a large allocation is a remap, not a copy.
-        o.nodes.shrink_to_fit();
-        o.packs.shrink_to_fit();
-        out.wide = o.nodes;
-        out.packs = o.packs;
+        (out.wide, out.packs) = o.finish(ctx.test.is_some());
     } else {
         let mut nodes = Vec::with_capacity(2 * refs.len().div_ceil(ctx.max_leaf.max(2)));
         emit_binary(
@@ -1139,11 +1144,163 @@ fn emit_binary(
     }
 }
 
-/// The wide tree's output arrays.
+/// The wide tree's nodes and packs as they are written: in runs, in the order a sequential build
+/// writes them. The last run (`cur`) takes what this task writes itself; the runs before it are
+/// finished ones: this task's own, closed when a subtree built on another thread was appended,
+/// and those subtrees' runs, moved in rather than copied. [`finish`](Self::finish) copies every
+/// run into place once, at the end, so a subtree built in parallel several levels down is
+/// copied once, not once per level.
 #[derive(Default)]
 struct WideOut {
+    runs: Vec<Run>,
+    cur: Run,
+    /// The nodes and packs in `runs`.
+    nodes_before: usize,
+    packs_before: usize,
+}
+
+/// A run of a [`WideOut`]: nodes and packs, and what to add to the node and pack indices in its
+/// nodes' child references to number them as in the finished tree.
+#[derive(Default)]
+struct Run {
     nodes: Vec<WideNode>,
     packs: Vec<TriPack>,
+    node_shift: usize,
+    pack_shift: usize,
+}
+
+/// Where a node was reserved in a [`WideOut`], to be written once its children are known.
+#[derive(Clone, Copy)]
+struct Slot {
+    run: usize,
+    pos: usize,
+}
+
+impl Run {
+    /// `c` with this run's shifts applied; leaves of references (not packs) are input positions
+    /// and keep theirs.
+    fn relocate(&self, c: ChildRef, packed: bool) -> ChildRef {
+        if c == ChildRef::EMPTY {
+            c
+        } else if c.is_leaf() {
+            if packed {
+                let items = c.items();
+                ChildRef::leaf((items.start + self.pack_shift) as u32, items.len() as u32)
+            } else {
+                c
+            }
+        } else {
+            ChildRef::node((c.index() + self.node_shift) as u32)
+        }
+    }
+}
+
+impl WideOut {
+    fn nodes_len(&self) -> usize {
+        self.nodes_before + self.cur.nodes.len()
+    }
+
+    fn packs_len(&self) -> usize {
+        self.packs_before + self.cur.packs.len()
+    }
+
+    /// Reserves a node, to be written with [`node_mut`](Self::node_mut); its index is
+    /// [`nodes_len`](Self::nodes_len) before the call.
+    fn reserve_node(&mut self) -> Slot {
+        self.cur.nodes.push(WideNode::EMPTY);
+        Slot {
+            run: self.runs.len(),
+            pos: self.cur.nodes.len() - 1,
+        }
+    }
+
+    fn node_mut(&mut self, slot: Slot) -> &mut WideNode {
+        if slot.run == self.runs.len() {
+            &mut self.cur.nodes[slot.pos]
+        } else {
+            &mut self.runs[slot.run].nodes[slot.pos]
+        }
+    }
+
+    /// Appends a subtree built into a `WideOut` of its own, whose root is `root`; returns the
+    /// root as numbered here. Moves the subtree's runs, copying nothing.
+    fn append(&mut self, sub: WideOut, root: ChildRef, packed: bool) -> ChildRef {
+        let (node_base, pack_base) = (self.nodes_len(), self.packs_len());
+        let mine = std::mem::take(&mut self.cur);
+        self.nodes_before += mine.nodes.len();
+        self.packs_before += mine.packs.len();
+        self.runs.push(mine);
+        for mut run in sub.runs.into_iter().chain([sub.cur]) {
+            run.node_shift += node_base;
+            run.pack_shift += pack_base;
+            self.nodes_before += run.nodes.len();
+            self.packs_before += run.packs.len();
+            self.runs.push(run);
+        }
+        let base = Run {
+            node_shift: node_base,
+            pack_shift: pack_base,
+            ..Run::default()
+        };
+        base.relocate(root, packed)
+    }
+
+    /// Trims the arrays' slack: a subtree's runs wait to be appended, and the slack of arrays
+    /// grown by doubling would add up to as much as the subtrees again.
+    fn shrink(&mut self) {
+        self.cur.nodes.shrink_to_fit();
+        self.cur.packs.shrink_to_fit();
+    }
+
+    /// The tree's nodes and packs, each run copied into place with its indices shifted (on
+    /// rayon's threads: `par::extend_range` writes each element in its place). A tree built on
+    /// one thread is one run and is returned as it is.
+    ///
+    /// PERF: appending the root's eight subtrees one after another (4.2 MB for the sphereflake)
+    /// took 0.43 ms on one thread while the other waited.
+    fn finish(mut self, packed: bool) -> (Vec<WideNode>, Vec<TriPack>) {
+        if self.runs.is_empty() {
+            // A sequential build grows both arrays by doubling; up to half of each would be
+            // unused capacity for the tree's lifetime (the bunny's wide tree took 7.0 MiB on 1
+            // thread and 3.9 MiB on 2). Shrinking a large allocation is a remap, not a copy.
+            self.shrink();
+            return (self.cur.nodes, self.cur.packs);
+        }
+        let (n, p) = (self.nodes_len(), self.packs_len());
+        self.runs.push(self.cur);
+        let runs = self.runs;
+        // Where each run's nodes and packs start, and the run holding element `i`.
+        let starts = |len: fn(&Run) -> usize| {
+            let mut at = 0;
+            runs.iter()
+                .map(|r| {
+                    let s = at;
+                    at += len(r);
+                    s
+                })
+                .collect::<Vec<usize>>()
+        };
+        let (node_start, pack_start) = (starts(|r| r.nodes.len()), starts(|r| r.packs.len()));
+        let run_of = |starts: &[usize], i: usize| starts.partition_point(|&b| b <= i) - 1;
+        let mut nodes = Vec::with_capacity(n);
+        par::extend_range(&mut nodes, 0..n, |i| {
+            let k = run_of(&node_start, i);
+            // Empty runs share their start with the next run; `partition_point` finds the last
+            // run starting at or before `i`, which is the one holding it.
+            let r = &runs[k];
+            let mut node = r.nodes[i - node_start[k]];
+            for ch in &mut node.children {
+                *ch = r.relocate(ChildRef(*ch), packed).0;
+            }
+            node
+        });
+        let mut packs = Vec::with_capacity(p);
+        par::extend_range(&mut packs, 0..p, |i| {
+            let k = run_of(&pack_start, i);
+            runs[k].packs[i - pack_start[k]]
+        });
+        (nodes, packs)
+    }
 }
 
 /// A set, and the splits already made below it (see [`presplit`]).
@@ -1256,17 +1413,15 @@ fn emit_wide(
         kids.insert(i, r);
         kids.insert(i, l);
     }
-    let index = out.nodes.len();
-    out.nodes.push(WideNode::EMPTY);
+    let index = out.nodes_len();
+    let slot = out.reserve_node();
     let mut node = WideNode::EMPTY;
     let bounds: Vec<Bounds> = kids.iter().map(|k| k.set.bounds).collect();
-    let big = kids
-        .iter()
-        .filter(|k| k.set.len() >= PAR_SUBTREE_MIN)
-        .count();
-    if ctx.parallel && big >= 2 {
+    let total: usize = kids.iter().map(|k| k.set.len()).sum();
+    if ctx.parallel && total >= PAR_WIDE_MIN {
         // Each child into its own arrays, concurrently; then appended in order, which is where a
-        // sequential build would have written them.
+        // sequential build would have written them. Every child is a task, the small ones too:
+        // left to this thread, they would keep it busy while the other has nothing to take.
         let mut slices = Vec::with_capacity(kids.len());
         let mut rest = refs;
         let mut at = base;
@@ -1282,18 +1437,12 @@ fn emit_wide(
             let mut sh = Shape::default();
             let start = k.set.start;
             let c = emit_wide(ctx, slice, start, k, &mut o, &mut sh, &mut Scratch::new());
-            // The arrays grew by doubling, and all eight wait to be appended: their slack
-            // would add up to as much as the subtrees again.
-            o.nodes.shrink_to_fit();
-            o.packs.shrink_to_fit();
+            o.shrink();
             (c, o, sh)
         });
-        let mut built = Vec::with_capacity(parts.len());
-        for (c, o, sh) in parts {
+        for (i, (c, o, sh)) in parts.into_iter().enumerate() {
             shape.merge(sh);
-            built.push((c, o));
-        }
-        for (i, c) in append_all(ctx, out, built).into_iter().enumerate() {
+            let c = out.append(o, c, ctx.test.is_some());
             set_child(&mut node, i, &bounds[i], c);
         }
     } else {
@@ -1302,79 +1451,24 @@ fn emit_wide(
             set_child(&mut node, i, &bounds[i], c);
         }
     }
-    out.nodes[index] = node;
+    *out.node_mut(slot) = node;
     ChildRef::node(index as u32)
-}
-
-/// Appends subtrees built into their own arrays, in order, relocating their node and pack
-/// indices; returns the relocated references to their roots. Nodes and packs are copied on
-/// rayon's threads: `par::extend_range` writes each element in its place.
-///
-/// PERF: appending the root's eight subtrees one after another (4.2 MB for the sphereflake)
-/// took 0.43 ms on one thread while the other waited.
-fn append_all(ctx: &Ctx<'_>, out: &mut WideOut, parts: Vec<(ChildRef, WideOut)>) -> Vec<ChildRef> {
-    // Where each part's nodes and packs start.
-    let mut node_base = Vec::with_capacity(parts.len());
-    let mut pack_base = Vec::with_capacity(parts.len());
-    let (mut nodes, mut packs) = (out.nodes.len(), out.packs.len());
-    for (_, p) in &parts {
-        node_base.push(nodes);
-        pack_base.push(packs);
-        nodes += p.nodes.len();
-        packs += p.packs.len();
-    }
-    let packed = ctx.test.is_some();
-    let relocate = |c: ChildRef, part: usize| {
-        if c == ChildRef::EMPTY {
-            c
-        } else if c.is_leaf() {
-            if packed {
-                let items = c.items();
-                ChildRef::leaf((items.start + pack_base[part]) as u32, items.len() as u32)
-            } else {
-                c
-            }
-        } else {
-            ChildRef::node((c.index() + node_base[part]) as u32)
-        }
-    };
-    // The part holding element `i` of the appended range, given the part starts.
-    let part_of = |bases: &[usize], i: usize| bases.partition_point(|&b| b <= i) - 1;
-    let first_node = out.nodes.len();
-    let first_pack = out.packs.len();
-    par::extend_range(&mut out.nodes, first_node..nodes, |i| {
-        let k = part_of(&node_base, i);
-        let mut n = parts[k].1.nodes[i - node_base[k]];
-        for ch in &mut n.children {
-            *ch = relocate(ChildRef(*ch), k).0;
-        }
-        n
-    });
-    par::extend_range(&mut out.packs, first_pack..packs, |i| {
-        let k = part_of(&pack_base, i);
-        parts[k].1.packs[i - pack_base[k]]
-    });
-    parts
-        .iter()
-        .enumerate()
-        .map(|(k, (root, _))| relocate(*root, k))
-        .collect()
 }
 
 /// A leaf: its triangles packed four to a pack, or its range of references.
 fn emit_leaf(ctx: &Ctx<'_>, range: &[PrimRef], set: &Set, out: &mut WideOut) -> ChildRef {
     match ctx.test {
         Some(test) => {
-            let first = out.packs.len();
+            let first = out.packs_len();
             for chunk in range.chunks(PACK) {
                 let mut tris = [(Triangle::new(Vec3::ZERO, Vec3::ZERO, Vec3::ZERO), 0u32); PACK];
                 for (slot, r) in tris.iter_mut().zip(chunk) {
                     let t = ctx.prims.triangle(r.id);
                     *slot = (t, r.id);
                 }
-                out.packs.push(TriPack::new(&tris[..chunk.len()], test));
+                out.cur.packs.push(TriPack::new(&tris[..chunk.len()], test));
             }
-            ChildRef::leaf(first as u32, (out.packs.len() - first) as u32)
+            ChildRef::leaf(first as u32, (out.packs_len() - first) as u32)
         }
         None => ChildRef::leaf(set.start as u32, set.len() as u32),
     }

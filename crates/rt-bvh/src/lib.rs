@@ -20,7 +20,8 @@
 //!   between. One SIMD slab test handles all children of a node; triangles sit in leaves as
 //!   [`TriPack`]s of four, one SIMD triangle test per pack ("pre-processed triangles", memory
 //!   laid out by rate of access: the boxes a ray tests at every step, the triangles only in
-//!   leaves).//! - **Reinserted** (preset `reinserted`, either layout with
+//!   leaves).
+//! - **Reinserted** (preset `reinserted`, either layout with
 //!   [`BvhParams::reinsertion_passes`]): before the splits become nodes, the subtrees with the
 //!   largest boxes are taken out one at a time and put back where they add the least area
 //!   (Bittner, Hapala & Havran 2013), keeping every leaf. A top-down build never revisits a
@@ -48,7 +49,8 @@
 //!   just fits a balanced tree are split by count, so the depth never exceeds [`MAX_DEPTH`] and
 //!   degenerate input costs O(N · MAX_DEPTH) at worst. Scratch memory: 32 bytes per primitive,
 //!   up to 512 KB per running build task for partitioning, plus, in the parallel build, the
-//!   subtrees built as tasks until they are appended (up to a second copy of the tree), so a
+//!   subtrees built as tasks until the finished tree is copied into place from them (up to a
+//!   second copy of the tree), so a
 //!   build's scratch stays below the finished tree plus its input (`cargo xtask scale` measures
 //!   it). With the `parallel` feature (default) large inputs build on rayon's threads; the
 //!   tree is the same, byte for byte, on any number of threads and without the feature.

@@ -44,7 +44,7 @@
 //! # Traversal
 //! Front to back (Hapala & Havran's listing in the lecture). A step at an interior node costs
 //! one subtraction and one multiplication (the distance to the plane) and picks the near child
-//! from the origin's side; a leaf tests its primitives, skipping those among the last 8 this ray
+//! by the direction's sign, with no comparison; a leaf tests its primitives, skipping those among the last 8 this ray
 //! tested ([`rt_core::Mailbox`]: a primitive spanning several leaves is tested once). A hit
 //! counts as final only if its distance lies inside the current leaf's interval
 //! `[t_entry, t_exit]`, since a primitive spanning several cells may be hit behind a closer

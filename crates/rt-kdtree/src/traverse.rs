@@ -2,9 +2,9 @@
 //!
 //! Both walk the leaves the ray crosses in order of distance, each with its parametric interval
 //! `[t0, t1]`. An interior node costs one subtraction and one multiplication: the distance to its
-//! split plane. The near child is the one on the ray origin's side (for an origin in the plane,
-//! the side the ray comes from), and the far child is visited only if the plane distance lies
-//! inside the interval.
+//! split plane. The near child is the one the direction enters first (by the direction's sign, so
+//! it costs no comparison), and each child is visited only if the interval reaches its side of
+//! the plane.
 //!
 //! The closest-hit rule: a primitive may be hit beyond the leaf being tested (it spans several
 //! cells), while a closer primitive waits in the next leaf. Such a hit is kept as the best so
@@ -23,9 +23,9 @@ pub(crate) const MAILBOX: usize = 8;
 
 /// Where the ray goes at one interior node.
 enum Step {
-    /// Only the child on the origin's side.
+    /// Only the child the direction enters first (the plane lies beyond the interval).
     Near(usize),
-    /// Only the other child.
+    /// Only the other child (the plane lies before the interval, or behind the origin).
     Far(usize),
     /// Both: the near one for `[t0, t]`, then the far one for `[t, t1]`.
     Both { near: usize, far: usize, t: f32 },
@@ -37,8 +37,10 @@ enum Step {
 #[derive(Clone, Copy)]
 struct RayAxes {
     o: [f32; 3],
-    d: [f32; 3],
     inv: [f32; 3],
+    /// Bit `a` set where the direction's `a` component has its sign bit set (−0 included): the
+    /// child the ray enters first at a plane of axis `a` is `first + (back_bits >> a & 1)`.
+    back_bits: usize,
 }
 
 impl RayAxes {
@@ -46,31 +48,40 @@ impl RayAxes {
     fn new(ray: &Ray) -> Self {
         Self {
             o: ray.origin.to_array(),
-            d: ray.dir().to_array(),
             inv: ray.inv_dir().to_array(),
+            back_bits: ray.dir().is_negative_bitmask() as usize,
         }
     }
 
     /// The step at interior node `node` for the ray's interval `[t0, t1]`.
+    ///
+    /// The near child is the one the direction enters first, found from the direction's sign
+    /// with no comparison. For a plane ahead of the origin that is the origin's side; for a plane
+    /// behind it (`t < 0 <= t0`) the ray only sees the far side, which holds the origin. An origin
+    /// in the plane goes by its direction, as the plane's own side rule has it.
+    ///
+    /// PERF: AMD Zen 3, one thread, against choosing by a comparison of the origin with the plane
+    /// (a branch that goes either way for scattered rays): kd ÷ wide BVH in one process, every
+    /// built-in scene and shared mesh (17), two runs each, new ÷ old per scene, geometric mean
+    /// (range): incoherent rays 1.13 (0.98–1.26), primary 1.04 (0.92–1.12), shadow 1.03
+    /// (0.96–1.16). The sign bits sit in one register: read from an array indexed by the axis,
+    /// the extra load on the path to the next node made primary rays 0.86–0.93x as fast (7
+    /// paired processes, 3 meshes).
     #[inline(always)]
     fn step(&self, node: &Node, t0: f32, t1: f32) -> Step {
         let a = node.axis();
-        let split = node.split();
         let first = node.index();
-        let t = (split - self.o[a]) * self.inv[a];
-        let below = self.o[a] < split || (self.o[a] == split && self.d[a] > 0.0);
-        let (near, far) = if below {
-            (first, first + 1)
-        } else {
-            (first + 1, first)
-        };
-        if t.is_nan() {
-            // Origin in the plane and direction parallel to it: 0 · ∞.
-            Step::InPlane { near, far }
-        } else if t < 0.0 || t > t1 * SLAB_FAR_SCALE {
+        let t = (node.split() - self.o[a]) * self.inv[a];
+        let s = (self.back_bits >> a) & 1;
+        let (near, far) = (first + s, first + 1 - s);
+        if t > t1 * SLAB_FAR_SCALE {
             Step::Near(near)
         } else if t * SLAB_FAR_SCALE < t0 {
             Step::Far(far)
+        } else if t.is_nan() {
+            // Origin in the plane and direction parallel to it: 0 · ∞. Both comparisons above
+            // are false for NaN, so this rare case costs nothing on the common path.
+            Step::InPlane { near, far }
         } else {
             Step::Both { near, far, t }
         }

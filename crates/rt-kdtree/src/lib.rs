@@ -44,8 +44,9 @@
 //! # Traversal
 //! Front to back (Hapala & Havran's listing in the lecture). A step at an interior node costs
 //! one subtraction and one multiplication (the distance to the plane) and picks the near child
-//! by the direction's sign, with no comparison; a leaf tests its primitives, skipping those among the last 8 this ray
-//! tested ([`rt_core::Mailbox`]: a primitive spanning several leaves is tested once). A hit
+//! by the direction's sign, with no comparison; a leaf tests its primitives, skipping those
+//! among the last 8 this ray tested ([`rt_core::Mailbox`]: a primitive spanning several leaves
+//! is tested once). A hit
 //! counts as final only if its distance lies inside the current leaf's interval
 //! `[t_entry, t_exit]`, since a primitive spanning several cells may be hit behind a closer
 //! primitive in the next leaf; such a hit is kept as the best so far, and the walk stops at the

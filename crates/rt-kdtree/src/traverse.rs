@@ -59,14 +59,13 @@ impl RayAxes {
     /// with no comparison. For a plane ahead of the origin that is the origin's side; for a plane
     /// behind it (`t < 0 <= t0`) the ray only sees the far side, which holds the origin. An origin
     /// in the plane goes by its direction, as the plane's own side rule has it.
-    ///
-    /// PERF: AMD Zen 3, one thread, against choosing by a comparison of the origin with the plane
-    /// (a branch that goes either way for scattered rays): kd ÷ wide BVH in one process, every
-    /// built-in scene and shared mesh (17), two runs each, new ÷ old per scene, geometric mean
-    /// (range): incoherent rays 1.13 (0.98–1.26), primary 1.04 (0.92–1.12), shadow 1.03
-    /// (0.96–1.16). The sign bits sit in one register: read from an array indexed by the axis,
-    /// the extra load on the path to the next node made primary rays 0.86–0.93x as fast (7
-    /// paired processes, 3 meshes).
+    // PERF: AMD Zen 3, one thread, against choosing by a comparison of the origin with the plane
+    // (a branch that goes either way for scattered rays): kd ÷ wide BVH in one process, every
+    // built-in scene and shared mesh (17), two runs each, new ÷ old per scene, geometric mean
+    // (range): incoherent rays 1.13 (0.98–1.26), primary 1.04 (0.92–1.12), shadow 1.03
+    // (0.96–1.16). The sign bits sit in one register: read from an array indexed by the axis,
+    // the extra load on the path to the next node made primary rays 0.86–0.93x as fast (7
+    // paired processes, 3 meshes).
     #[inline(always)]
     fn step(&self, node: &Node, t0: f32, t1: f32) -> Step {
         let a = node.axis();

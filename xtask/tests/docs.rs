@@ -426,6 +426,7 @@ fn documented_crates() -> Vec<(String, PathBuf)> {
         .collect();
     crates.push(("xtask".into(), root.join("xtask")));
     crates.push(("benches".into(), root.join("benches")));
+    crates.push(("python".into(), root.join("python")));
     crates.sort();
     crates
 }

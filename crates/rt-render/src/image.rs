@@ -89,19 +89,22 @@ impl Image {
     /// # Errors
     /// [`ImageError::Write`] naming the file when it cannot be created or written.
     pub fn save_png(&self, path: &Path) -> Result<(), ImageError> {
-        let bytes: &[u8] = self.pixels.as_flattened();
-        image::save_buffer_with_format(
-            path,
-            bytes,
-            self.width,
-            self.height,
-            image::ExtendedColorType::Rgb8,
-            image::ImageFormat::Png,
-        )
-        .map_err(|e| ImageError::Write {
+        // Encoded in memory and written in one call, so that every error of the write (a full
+        // disk included) is reported, not lost in a buffered writer's drop.
+        let write = || -> Result<(), png::EncodingError> {
+            let mut bytes = Vec::new();
+            let mut encoder = png::Encoder::new(&mut bytes, self.width, self.height);
+            encoder.set_color(png::ColorType::Rgb);
+            encoder.set_depth(png::BitDepth::Eight);
+            let mut writer = encoder.write_header()?;
+            writer.write_image_data(self.pixels.as_flattened())?;
+            writer.finish()?;
+            Ok(std::fs::write(path, &bytes)?)
+        };
+        write().map_err(|e| ImageError::Write {
             path: path.to_owned(),
             message: match e {
-                image::ImageError::IoError(io) => io.to_string(),
+                png::EncodingError::IoError(io) => io.to_string(),
                 other => other.to_string(),
             },
         })

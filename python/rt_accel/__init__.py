@@ -88,6 +88,11 @@ def _nthreads(nthreads: int) -> int:
     return n
 
 
+def _nsamples(nsamples: int) -> None:
+    if int(nsamples) < 1:
+        raise ValueError(f"nsamples must be positive; got {nsamples}")
+
+
 class Scene:
     """Triangle meshes and one acceleration structure over them.
 
@@ -364,7 +369,9 @@ class Scene:
         (_, _, _, _, _, d, _), lead = self._closest(query_points, False, nthreads)
         return d.reshape(lead)
 
-    def compute_signed_distance(self, query_points, nthreads: int = 0) -> np.ndarray:
+    def compute_signed_distance(
+        self, query_points, nthreads: int = 0, nsamples: int = 1
+    ) -> np.ndarray:
         """The distance from each point to the scene, negative inside: float32 ``(...)``.
 
         Inside means a generalised winding number of the scene's triangles above one half
@@ -372,13 +379,18 @@ class Scene:
         decides the side and exactly where it does not. On a closed, consistently oriented mesh
         that is the mesh's inside; on a mesh with holes it is still well defined, where Open3D's
         sign (the parity of one ray's crossings) depends on where that ray leaves.
+
+        ``nsamples`` is taken so that Open3D's calls run unchanged, and must be positive, but
+        changes nothing: Open3D votes with ``nsamples`` rays, the winding number needs no vote.
         """
+        _nsamples(nsamples)
         (_, _, _, _, _, d, inside), lead = self._closest(query_points, True, nthreads)
         return np.where(inside, -d, d).reshape(lead)
 
-    def compute_occupancy(self, query_points, nthreads: int = 0) -> np.ndarray:
+    def compute_occupancy(self, query_points, nthreads: int = 0, nsamples: int = 1) -> np.ndarray:
         """1.0 where a point is inside (as :meth:`compute_signed_distance` decides), else 0.0:
-        float32 ``(...)``."""
+        float32 ``(...)``. ``nsamples`` is as for :meth:`compute_signed_distance`."""
+        _nsamples(nsamples)
         rows, lead = _rows(query_points, 3, "query_points")
         inside = self._native.inside(rows, list(lead), _nthreads(nthreads))
         return inside.astype(np.float32).reshape(lead)

@@ -75,6 +75,8 @@ def test_rays_out_of_range(scene):
         scene.test_occlusions(np.array([[0, 0, 0, 0, 0, 1]]), tnear=2.0, tfar=1.0)
     with pytest.raises(ValueError, match="0 <= tnear <= tfar"):
         scene.test_occlusions(np.array([[0, 0, 0, 0, 0, 1]]), tnear=np.nan)
+    with pytest.raises(ValueError, match="nsamples must be positive"):
+        scene.compute_signed_distance(np.zeros((1, 3)), nsamples=0)
     with pytest.raises(ValueError, match="nthreads must be 0"):
         scene.cast_rays(np.array([[0, 0, 0, 0, 0, 1]]), nthreads=-1)
 

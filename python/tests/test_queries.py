@@ -160,6 +160,11 @@ def test_cube_answers_by_hand():
     assert scene.count_intersections(np.array([0.5, 0.5, 3, 0, 0, -1])) == 4
     points = np.array([[0.5, 0.5, 0.5], [0.5, 0.5, 1.25], [2.0, 0.5, 0.5]])
     np.testing.assert_allclose(scene.compute_signed_distance(points), [-0.5, 0.25, 1.0])
+    # Open3D's call, with its vote of rays, runs unchanged and answers the same.
+    np.testing.assert_array_equal(
+        scene.compute_signed_distance(points, nthreads=0, nsamples=5),
+        scene.compute_signed_distance(points),
+    )
     np.testing.assert_array_equal(scene.compute_occupancy(points), [1, 0, 0])
 
 

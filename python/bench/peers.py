@@ -1,0 +1,173 @@
+"""rt_accel beside the Python tools people use today, on the same triangles, rays and points.
+
+    python python/bench/peers.py [--meshes stanford-bunny.obj,spot.obj,...] [--repeats 3]
+
+For each mesh of ``../shared/meshes`` named (or ``RT_SHARED_MESHES``), each query is timed on
+every thread (best of ``--repeats`` runs, the crossing from Python included) and its answers are
+compared with rt_accel's:
+
+- primary rays from a camera whose image the mesh fills (the hit share is printed beside the
+  speed), scattered rays through the mesh's box, and shadow rays from the primary hits to a
+  light;
+- closest points and distances, signed distances and the signs themselves, on points half in
+  the mesh's box grown by a quarter and half near its surface.
+
+Peers: Open3D's ``RaycastingScene`` (pip package ``open3d``; its wheel imports only with
+Debian's ``libusb-1.0-0``). A peer that is not installed is skipped, and the table says so.
+Ratios are the peer's time over rt_accel's: above 1, rt_accel is faster.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import time
+from pathlib import Path
+
+import numpy as np
+
+import rt_accel
+
+
+def meshes_dir() -> Path:
+    env = os.environ.get("RT_SHARED_MESHES")
+    return Path(env) if env else Path(__file__).resolve().parents[2].parent / "shared" / "meshes"
+
+
+def filled_view(v: np.ndarray, width: int, height: int) -> np.ndarray:
+    """Rays from a pinhole camera looking at the mesh from (0.3, 0.4, 1), its image plane
+    spanning exactly the mesh's projection, so the mesh fills the image."""
+    center = (v.min(0) + v.max(0)) / 2
+    radius = float(np.linalg.norm(v - center, axis=1).max())
+    back = np.array([0.3, 0.4, 1.0]) / np.linalg.norm([0.3, 0.4, 1.0])
+    eye = center + back * 2.5 * radius
+    right = np.cross([0.0, 1.0, 0.0], back)
+    right /= np.linalg.norm(right)
+    up = np.cross(back, right)
+    rel = v - eye
+    depth = rel @ -back
+    x, y = (rel @ right) / depth, (rel @ up) / depth
+    xs = np.linspace(x.min(), x.max(), width)
+    ys = np.linspace(y.max(), y.min(), height)
+    gx, gy = np.meshgrid(xs, ys)
+    d = gx[..., None] * right + gy[..., None] * up - back
+    o = np.broadcast_to(eye, d.shape)
+    return np.concatenate([o, d], axis=-1).reshape(-1, 6).astype(np.float32)
+
+
+def scattered(v: np.ndarray, n: int, rng) -> np.ndarray:
+    lo, hi = v.min(0), v.max(0)
+    a = lo + rng.random((n, 3)) * (hi - lo)
+    b = lo + rng.random((n, 3)) * (hi - lo)
+    return np.hstack([a, b - a]).astype(np.float32)
+
+
+def points(v: np.ndarray, n: int, rng) -> np.ndarray:
+    lo, hi = v.min(0), v.max(0)
+    grow = 0.25 * (hi - lo)
+    box = lo - grow + rng.random((n // 2, 3)) * (hi - lo + 2 * grow)
+    near = v[rng.integers(0, len(v), n - n // 2)] + 0.01 * (hi - lo).max() * rng.normal(size=(n - n // 2, 3))
+    return np.vstack([box, near]).astype(np.float32)
+
+
+def best(f, repeats: int):
+    times, out = [], None
+    for _ in range(repeats):
+        t = time.perf_counter()
+        out = f()
+        times.append(time.perf_counter() - t)
+    return min(times), out
+
+
+def open3d_scene(v, t):
+    try:
+        import open3d as o3d
+    except ImportError as e:
+        return None, f"open3d not installed ({e})"
+    scene = o3d.t.geometry.RaycastingScene()
+    scene.add_triangles(o3d.core.Tensor(v), o3d.core.Tensor(t.astype(np.uint32)))
+    return (scene, o3d), None
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--meshes", default="stanford-bunny.obj,spot.obj,rocker-arm.obj")
+    ap.add_argument("--repeats", type=int, default=3)
+    ap.add_argument("--width", type=int, default=1024)
+    ap.add_argument("--height", type=int, default=768)
+    ap.add_argument("--scattered", type=int, default=1_000_000)
+    ap.add_argument("--points", type=int, default=200_000)
+    ap.add_argument("--signed-points", type=int, default=50_000)
+    args = ap.parse_args()
+    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} threads, "
+          f"best of {args.repeats}; ratio = peer time / rt_accel time")
+    rng = np.random.default_rng(1)
+    for name in args.meshes.split(","):
+        v, t = rt_accel.load_mesh(meshes_dir() / name)
+        ours = rt_accel.Scene("bvh")
+        ours.add_triangles(v, t)
+        ours.build()
+        primary = filled_view(v, args.width, args.height)
+        scatter = scattered(v, args.scattered, rng)
+        hits = ours.cast_rays(primary)
+        hit = np.isfinite(hits["t_hit"])
+        light = v.max(0) + (v.max(0) - v.min(0))
+        p = primary[hit, :3] + hits["t_hit"][hit, None] * primary[hit, 3:]
+        p = p + 1e-4 * hits["primitive_normals"][hit] * np.sign(
+            -(primary[hit, 3:] * hits["primitive_normals"][hit]).sum(1, keepdims=True))
+        shadow = np.hstack([p, light - p]).astype(np.float32)
+        pts = points(v, args.points, rng)
+        spts = pts[: args.signed_points]
+        print(f"\n## {name}: {len(t)} triangles; primary {len(primary)} rays, "
+              f"{hit.mean():.1%} hit; scattered {len(scatter)} rays, "
+              f"{np.isfinite(ours.cast_rays(scatter)['t_hit']).mean():.1%} hit; "
+              f"shadow {len(shadow)} rays; {len(pts)} points")
+        peer, why = open3d_scene(v, t)
+        if peer is None:
+            print(f"open3d: skipped: {why}")
+            continue
+        o3s, o3d = peer
+        T = o3d.core.Tensor
+        rows = [
+            ("cast_rays, primary", lambda: ours.cast_rays(primary),
+             lambda: o3s.cast_rays(T(primary))),
+            ("cast_rays, scattered", lambda: ours.cast_rays(scatter),
+             lambda: o3s.cast_rays(T(scatter))),
+            ("test_occlusions, shadow", lambda: ours.test_occlusions(shadow, tfar=1.0),
+             lambda: o3s.test_occlusions(T(shadow), tfar=1.0)),
+            ("count_intersections, primary", lambda: ours.count_intersections(primary),
+             lambda: o3s.count_intersections(T(primary))),
+            ("compute_closest_points", lambda: ours.compute_closest_points(pts),
+             lambda: o3s.compute_closest_points(T(pts))),
+            ("compute_signed_distance", lambda: ours.compute_signed_distance(spts),
+             lambda: o3s.compute_signed_distance(T(spts))),
+        ]
+        print("| query | rt_accel s | open3d s | ratio | answers |")
+        print("| --- | ---: | ---: | ---: | --- |")
+        for label, a, b in rows:
+            ta, ra = best(a, args.repeats)
+            tb, rb = best(b, args.repeats)
+            if isinstance(rb, dict):
+                rb = {k: x.numpy() for k, x in rb.items()}
+            else:
+                rb = rb.numpy()
+            if label.startswith("cast_rays"):
+                same = np.mean(ra["primitive_ids"] == rb["primitive_ids"])
+                note = f"same triangle on {same:.4%}"
+            elif label.startswith("test_occlusions"):
+                note = f"same answer on {np.mean(ra == rb.astype(bool)):.4%}"
+            elif label.startswith("count"):
+                note = f"same count on {np.mean(ra == rb):.4%}"
+            elif label.startswith("compute_closest"):
+                d = np.abs(np.linalg.norm(ra["points"] - pts, axis=1)
+                           - np.linalg.norm(rb["points"] - pts, axis=1))
+                note = f"distances within 1e-5: {np.mean(d <= 1e-5 * (1 + np.abs(ra['points']).max())):.4%}"
+            else:
+                wrong = int(np.sum((ra < 0) != (rb < 0)))
+                note = f"signs differ on {wrong} of {len(spts)} points (rt_accel's by winding number)"
+            print(f"| {label} | {ta:.4f} | {tb:.4f} | {tb / ta:.2f} | {note} |")
+
+
+if __name__ == "__main__":
+    main()

@@ -1371,34 +1371,17 @@ fn soup(rng: &mut Rng, n: usize, lo: Vec3, hi: Vec3, size: f32) -> Vec<Triangle>
         .collect()
 }
 
-/// The twelve triangles of the box `[lo, hi]`, facing outwards (inwards with `inwards`).
+/// The twelve triangles of the box `[lo, hi]` ([`Mesh::cuboid`]), facing outwards (inwards
+/// with `inwards`).
 fn box_triangles(lo: Vec3, hi: Vec3, inwards: bool) -> Vec<Triangle> {
-    let corner = |i: usize| {
-        Vec3::new(
-            if i & 1 == 0 { lo.x } else { hi.x },
-            if i & 2 == 0 { lo.y } else { hi.y },
-            if i & 4 == 0 { lo.z } else { hi.z },
-        )
-    };
-    // Each face as four corners counter-clockwise seen from outside.
-    let faces = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let mut tris = Vec::new();
-    for [a, b, c, d] in faces {
-        let (a, b, c, d) = (corner(a), corner(b), corner(c), corner(d));
-        if inwards {
-            tris.extend([Triangle::new(a, c, b), Triangle::new(a, d, c)]);
-        } else {
-            tris.extend([Triangle::new(a, b, c), Triangle::new(a, c, d)]);
-        }
+    let tris = rt_core::Mesh::cuboid(lo, hi).triangles();
+    if inwards {
+        tris.iter()
+            .map(|t| Triangle::new(t.v0, t.v2, t.v1))
+            .collect()
+    } else {
+        tris
     }
-    tris
 }
 
 /// Closed meshes, where inside and outside mean something: a box with a box-shaped cavity

@@ -222,6 +222,46 @@ impl Mesh {
         Ok(self)
     }
 
+    /// The box `[lo, hi]` as a closed mesh of eight corners and twelve triangles facing
+    /// outwards, each face split along the diagonal from its lowest corner.
+    ///
+    /// ```
+    /// use rt_core::{Mesh, glam::Vec3};
+    /// let cube = Mesh::cuboid(Vec3::ZERO, Vec3::ONE);
+    /// assert_eq!((cube.positions().len(), cube.triangle_count()), (8, 12));
+    /// // Facing outwards: the bottom face's normal points down.
+    /// assert!(cube.triangle(0).normal().z < 0.0);
+    /// ```
+    pub fn cuboid(lo: Vec3, hi: Vec3) -> Self {
+        let positions = (0..8)
+            .map(|i| {
+                Vec3::new(
+                    if i & 1 == 0 { lo.x } else { hi.x },
+                    if i & 2 == 0 { lo.y } else { hi.y },
+                    if i & 4 == 0 { lo.z } else { hi.z },
+                )
+            })
+            .collect();
+        // Each face as its four corners, counter-clockwise seen from outside.
+        let faces: [[u32; 4]; 6] = [
+            [0, 2, 3, 1],
+            [4, 5, 7, 6],
+            [0, 1, 5, 4],
+            [2, 6, 7, 3],
+            [0, 4, 6, 2],
+            [1, 3, 7, 5],
+        ];
+        let indices = faces
+            .iter()
+            .flat_map(|&[a, b, c, d]| [[a, b, c], [a, c, d]])
+            .collect();
+        Self {
+            positions,
+            indices,
+            ..Self::default()
+        }
+    }
+
     /// A mesh that shares no vertices: three positions per triangle.
     pub fn from_triangles(tris: &[Triangle]) -> Self {
         let positions = tris.iter().flat_map(|t| [t.v0, t.v1, t.v2]).collect();

@@ -1,9 +1,11 @@
 //! Inside, outside and signed distance over any rt-accel structure.
 //!
 //! - [`WindingTree`] answers whether a point is inside a triangle mesh by its generalised
-//!   winding number, robust to holes and cracks, fast through Barill et al.'s cluster
-//!   expansion with a stated error bound, and exact where that bound cannot decide (see the
-//!   [`winding`] module). [`winding_number_exact`] is the reference sum.
+//!   winding number, robust to holes and cracks: counted exactly by the crossings of one ray
+//!   with the mesh and caps over its holes (the [`crossing`] module), or evaluated fast
+//!   through Barill et al.'s cluster expansion with a stated error bound, and summed exactly
+//!   where that bound cannot decide (the [`winding`] module). [`winding_number_exact`] is the
+//!   reference sum.
 //! - [`SignedDistance`], implemented for every [`Accel`], puts that sign on the structure's
 //!   closest-point distance ([`SignedDistance::signed_distance`]), and offers the simple
 //!   alternative that counts the crossings of rays ([`SignedDistance::inside_by_parity`]).
@@ -34,7 +36,11 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod crossing;
 pub mod winding;
+
+#[cfg(test)]
+mod test_meshes;
 
 pub use winding::{NotATriangle, Winding, WindingTree, solid_angle, winding_number_exact};
 

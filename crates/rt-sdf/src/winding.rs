@@ -42,6 +42,7 @@
 //! computed exact sum and the computed fast one differ from the true values by about
 //! `1e-16 ×` the number of triangles, and the tests allow `1e-9`.
 //!
+use crate::crossing::{self, AxisRay};
 use bytemuck::Zeroable;
 use glam::{DVec3, Vec3};
 use rt_core::Primitive;
@@ -176,11 +177,11 @@ rt_core::pod_struct! {
 /// 4π, with `v_k = Σᵢ (T_iik + T_kii / 2)`; the fields keep exactly what that needs, over
 /// 4π and with the constant factors folded in.
 #[derive(Clone, Copy, Debug)]
-struct Cluster {
+pub(crate) struct Cluster {
     /// The area-weighted centroid of the cluster's triangles.
-    center: [f64; 3],
+    pub(crate) center: [f64; 3],
     /// Every point of every triangle of the cluster is within this distance of `center`.
-    radius: f64,
+    pub(crate) radius: f64,
     /// The triangles' total area.
     area: f64,
     /// `tr M / 4π`: the constant of the `1/|r|³` term.
@@ -196,9 +197,9 @@ struct Cluster {
     cubic: [f64; 10],
     /// A leaf's first triangle (in the tree's order); an interior node's second child (its
     /// first is the next cluster).
-    first: u32,
+    pub(crate) first: u32,
     /// A leaf's number of triangles (at least 1); 0 for an interior node.
-    count: u32,
+    pub(crate) count: u32,
 }
 }
 
@@ -329,12 +330,19 @@ impl Cluster {
 /// expansion needs each cluster's moments over triangles it holds once, and the kd-tree, the
 /// grids and the octree list a triangle in every cell it crosses. Building it sorts the
 /// triangles by median splits, `O(n log n)`; it keeps a copy of them and 232 bytes per
-/// cluster of at most 8.
+/// cluster of at most 8. It also finds the edges the triangles leave unmatched and keeps the
+/// caps that close them, in a tree of their own, for [counting crossings](crate::crossing)
+/// in [`is_inside`](Self::is_inside).
 #[derive(Clone, Debug)]
 pub struct WindingTree {
-    nodes: Vec<Cluster>,
-    tris: Vec<[Vec3; 3]>,
+    pub(crate) nodes: Vec<Cluster>,
+    pub(crate) tris: Vec<[Vec3; 3]>,
     area: f64,
+    /// The triangles' bounding box, `lo` then `hi` (empty: `lo > hi`).
+    bounds: [Vec3; 2],
+    /// The caps that close the triangles ([`crossing`]), in a tree of their
+    /// own (which has none); `None` where there would be too many to pay.
+    pub(crate) caps: Option<Box<WindingTree>>,
 }
 
 /// Triangles in a leaf cluster at most.
@@ -351,13 +359,33 @@ impl WindingTree {
     /// # Errors
     /// [`NotATriangle`] for the first valid primitive that is not a triangle.
     pub fn build<P: Primitive>(prims: &[P]) -> Result<Self, NotATriangle> {
-        let mut tris = triangles(prims)?;
+        let tris = triangles(prims)?;
+        let caps = crossing::caps(&tris);
+        let mut tree = Self::of(tris);
+        if caps.len() <= crossing::MAX_CAPS.max(tree.len() / 4) {
+            tree.caps = Some(Box::new(Self::of(caps)));
+        }
+        Ok(tree)
+    }
+
+    /// The tree over `tris` as they are, without caps.
+    fn of(mut tris: Vec<[Vec3; 3]>) -> Self {
         let mut nodes = Vec::with_capacity(2 * tris.len().div_ceil(LEAF));
         if !tris.is_empty() {
             build_node(&mut nodes, &mut tris, 0);
         }
         let area = nodes.first().map_or(0.0, |c| c.area);
-        Ok(Self { nodes, tris, area })
+        let bounds = tris.iter().flatten().fold(
+            [Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)],
+            |[lo, hi], &v| [lo.min(v), hi.max(v)],
+        );
+        Self {
+            nodes,
+            tris,
+            area,
+            bounds,
+            caps: None,
+        }
     }
 
     /// How many triangles the tree holds.
@@ -375,6 +403,14 @@ impl WindingTree {
         std::mem::size_of::<Self>()
             + self.nodes.capacity() * std::mem::size_of::<Cluster>()
             + self.tris.capacity() * std::mem::size_of::<[Vec3; 3]>()
+            + self.caps.as_ref().map_or(0, |c| c.memory_bytes())
+    }
+
+    /// How many triangles close the tree's holes for [counting
+    /// crossings](crate::crossing): 0 for a closed mesh; `None` where there would be too many
+    /// to pay, and the winding number is always evaluated by the tree.
+    pub fn caps(&self) -> Option<usize> {
+        self.caps.as_ref().map(|c| c.len())
     }
 
     /// The winding number around `point`, within `tolerance` of the exact sum (rounding aside;
@@ -391,6 +427,24 @@ impl WindingTree {
         if tolerance.is_nan() || tolerance <= 0.0 {
             return self.walk(q, |_, _| false);
         }
+        self.evaluate(q, tolerance)
+    }
+
+    /// The signed count of the crossings of an axis ray from `q` with the triangles and their
+    /// caps, with the caps: `None` where the tree keeps no caps or no axis ray could be
+    /// counted exactly.
+    fn crossing_count(&self, q: DVec3) -> Option<(i64, &WindingTree)> {
+        let caps = self.caps.as_deref()?;
+        let [lo, hi] = self.bounds;
+        AxisRay::from_point(q, lo, hi)
+            .iter()
+            .find_map(|ray| Some(self.crossings(ray)? + caps.crossings(ray)?))
+            .map(|count| (count, caps))
+    }
+
+    /// The tree's own evaluation of the winding number around `q`, within `tolerance` (above
+    /// 0) of the exact sum.
+    fn evaluate(&self, q: DVec3, tolerance: f64) -> Winding {
         // PERF: first each cluster may take up to a fixed share of the tolerance, which lets
         // the small clusters near the point be taken much closer than an even share by area
         // would; the bounds actually taken usually sum to far below the tolerance. Only when
@@ -444,19 +498,35 @@ impl WindingTree {
 
     /// Whether `point` is inside: whether its winding number is above ½.
     ///
-    /// Decided by the fast evaluation when its error bound leaves no doubt, and by the exact
-    /// sum over the tree otherwise, so it answers as [`winding_number_exact`] would except
-    /// where the exact value is within rounding (about `1e-16 ×` the triangle count) of ½.
-    /// A point with a non-finite coordinate is outside.
+    /// Decided by the crossings of one ray and the caps' fast evaluation where the tree keeps
+    /// caps ([`crossing`]), else by the tree's fast evaluation, when its error
+    /// bound leaves no doubt; by the exact sum over the tree otherwise. So it answers as
+    /// [`winding_number_exact`] would except where the exact value is within rounding (about
+    /// `1e-16 ×` the triangle count) of ½. A point with a non-finite coordinate is outside.
     pub fn is_inside(&self, point: Vec3) -> bool {
+        if !point.is_finite() {
+            return false;
+        }
+        let q = point.as_dvec3();
         let rounding = 1e-12 + 1e-15 * self.tris.len() as f64;
-        for tolerance in [0.25, 0.02, 0.0] {
-            let w = self.winding_number(point, tolerance);
-            if tolerance == 0.0 || (w.value - 0.5).abs() > w.error_bound + rounding {
+        let crossings = self.crossing_count(q);
+        for tolerance in [0.25, 0.02] {
+            let w = match crossings {
+                Some((count, caps)) if caps.is_empty() => return count > 0,
+                Some((count, caps)) => {
+                    let w = caps.evaluate(q, tolerance);
+                    Winding {
+                        value: count as f64 - w.value,
+                        ..w
+                    }
+                }
+                None => self.evaluate(q, tolerance),
+            };
+            if (w.value - 0.5).abs() > w.error_bound + rounding {
                 return w.value > 0.5;
             }
         }
-        false
+        self.walk(q, |_, _| false).value > 0.5
     }
 }
 
@@ -490,29 +560,8 @@ fn build_node(nodes: &mut Vec<Cluster>, tris: &mut [[Vec3; 3]], first: usize) ->
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::test_meshes::sphere;
     use rt_core::{Rng, Triangle};
-
-    /// A closed UV sphere of radius `r` around `c`, faces outwards.
-    fn sphere(c: Vec3, r: f32, rings: usize, segments: usize) -> Vec<Triangle> {
-        let at = |i: usize, j: usize| {
-            let theta = std::f32::consts::PI * i as f32 / rings as f32;
-            let phi = std::f32::consts::TAU * (j % segments) as f32 / segments as f32;
-            c + r * Vec3::new(
-                theta.sin() * phi.cos(),
-                theta.sin() * phi.sin(),
-                theta.cos(),
-            )
-        };
-        let mut tris = Vec::new();
-        for i in 0..rings {
-            for j in 0..segments {
-                let (a, b, cc, d) = (at(i, j), at(i + 1, j), at(i + 1, j + 1), at(i, j + 1));
-                tris.push(Triangle::new(a, b, cc));
-                tris.push(Triangle::new(a, cc, d));
-            }
-        }
-        tris
-    }
 
     fn random_soup(rng: &mut Rng, n: usize, spread: f32) -> Vec<Triangle> {
         let mut point = || Vec3::new(rng.f32(), rng.f32(), rng.f32()) * spread;

@@ -61,22 +61,7 @@ fn run(target: &str, what: &str, bytes: &[u8]) {
 }
 
 fn cube() -> Mesh {
-    let p: Vec<Vec3> = (0..8)
-        .map(|i| Vec3::new((i & 1) as f32, ((i >> 1) & 1) as f32, ((i >> 2) & 1) as f32))
-        .collect();
-    let quads = [
-        [0, 2, 3, 1],
-        [4, 5, 7, 6],
-        [0, 1, 5, 4],
-        [2, 6, 7, 3],
-        [0, 4, 6, 2],
-        [1, 3, 7, 5],
-    ];
-    let tris = quads
-        .iter()
-        .flat_map(|q: &[u32; 4]| [[q[0], q[1], q[2]], [q[0], q[2], q[3]]])
-        .collect();
-    Mesh::new(p, tris).expect("cube")
+    Mesh::cuboid(Vec3::ZERO, Vec3::ONE)
 }
 
 /// Every seed: (target, file name, bytes).

@@ -12,9 +12,13 @@ compared with rt_accel's:
 - closest points and distances, signed distances and the signs themselves, on points half in
   the mesh's box grown by a quarter and half near its surface.
 
-Peers: Open3D's ``RaycastingScene`` (pip package ``open3d``; its wheel imports only with
-Debian's ``libusb-1.0-0``). A peer that is not installed is skipped, and the table says so.
-Ratios are the peer's time over rt_accel's: above 1, rt_accel is faster.
+Peers, each where it has the query: Open3D's ``RaycastingScene`` (pip package ``open3d``; its
+wheel imports only with Debian's ``libusb-1.0-0``): every query. embreex (Embree 4, as trimesh
+uses it; one thread): rays. libigl (``libigl``): closest points, and signed distance by its
+fast winding number. point-cloud-utils: closest points, and signed distance by fast winding
+numbers. A peer that is not installed is skipped, and the table says so. Ratios are the
+peer's time over rt_accel's: above 1, rt_accel is faster. Sign differences are counted against
+rt_accel's, which are the exact winding number's.
 """
 
 from __future__ import annotations
@@ -80,14 +84,74 @@ def best(f, repeats: int):
     return min(times), out
 
 
-def open3d_scene(v, t):
-    try:
-        import open3d as o3d
-    except ImportError as e:
-        return None, f"open3d not installed ({e})"
+def missed_as(ids: np.ndarray, invalid) -> np.ndarray:
+    """Triangle ids as int64 with -1 for a miss, whatever a library's value for one."""
+    ids = ids.astype(np.int64)
+    return np.where(ids == np.int64(invalid), -1, ids)
+
+
+def peer_open3d(v, t):
+    import open3d as o3d
+
     scene = o3d.t.geometry.RaycastingScene()
     scene.add_triangles(o3d.core.Tensor(v), o3d.core.Tensor(t.astype(np.uint32)))
-    return (scene, o3d), None
+    T = o3d.core.Tensor
+    return {
+        "cast_rays": lambda r: missed_as(
+            scene.cast_rays(T(r))["primitive_ids"].numpy(), o3d.t.geometry.RaycastingScene.INVALID_ID),
+        "test_occlusions": lambda r: scene.test_occlusions(T(r), tfar=1.0).numpy().astype(bool),
+        "count_intersections": lambda r: scene.count_intersections(T(r)).numpy(),
+        "closest_points": lambda p: np.linalg.norm(
+            scene.compute_closest_points(T(p))["points"].numpy() - p, axis=1),
+        "signed_distance": lambda p: scene.compute_signed_distance(T(p)).numpy(),
+    }
+
+
+def peer_embreex(v, t):
+    from embreex import rtcore_scene
+    from embreex.mesh_construction import TriangleMesh
+
+    scene = rtcore_scene.EmbreeScene()
+    TriangleMesh(scene, v.astype(np.float32), t.astype(np.int32))
+
+    def cast(r):
+        out = scene.run(np.ascontiguousarray(r[:, :3]), np.ascontiguousarray(r[:, 3:]), output=1)
+        return np.where(out["geomID"] < 0, -1, out["primID"]).astype(np.int64)
+
+    def occluded(r):
+        dists = np.ones(len(r), dtype=np.float32)
+        hit = scene.run(np.ascontiguousarray(r[:, :3]), np.ascontiguousarray(r[:, 3:]),
+                        dists=dists, query="OCCLUDED")
+        return np.asarray(hit) >= 0
+
+    return {"cast_rays": cast, "test_occlusions": occluded}
+
+
+def peer_libigl(v, t):
+    import igl
+
+    V, F = v.astype(np.float64), t.astype(np.int64)
+    fwn = igl.SIGNED_DISTANCE_TYPE_FAST_WINDING_NUMBER
+    return {
+        "closest_points": lambda p: np.sqrt(
+            igl.point_mesh_squared_distance(p.astype(np.float64), V, F)[0]),
+        "signed_distance": lambda p: igl.signed_distance(p.astype(np.float64), V, F,
+                                                         sign_type=fwn)[0],
+    }
+
+
+def peer_pcu(v, t):
+    import point_cloud_utils as pcu
+
+    V, F = v.astype(np.float64), t.astype(np.int32)
+    return {
+        "closest_points": lambda p: pcu.closest_points_on_mesh(p.astype(np.float64), V, F)[0],
+        "signed_distance": lambda p: pcu.signed_distance_to_mesh(p.astype(np.float64), V, F)[0],
+    }
+
+
+PEERS = {"open3d": peer_open3d, "embreex": peer_embreex, "libigl": peer_libigl,
+         "point-cloud-utils": peer_pcu}
 
 
 def main() -> None:
@@ -123,50 +187,46 @@ def main() -> None:
               f"{hit.mean():.1%} hit; scattered {len(scatter)} rays, "
               f"{np.isfinite(ours.cast_rays(scatter)['t_hit']).mean():.1%} hit; "
               f"shadow {len(shadow)} rays; {len(pts)} points")
-        peer, why = open3d_scene(v, t)
-        if peer is None:
-            print(f"open3d: skipped: {why}")
-            continue
-        o3s, o3d = peer
-        T = o3d.core.Tensor
+        ids = lambda r: ours.cast_rays(r)["primitive_ids"].astype(np.int64)  # noqa: E731
+        miss = np.int64(rt_accel.INVALID_ID)
         rows = [
-            ("cast_rays, primary", lambda: ours.cast_rays(primary),
-             lambda: o3s.cast_rays(T(primary))),
-            ("cast_rays, scattered", lambda: ours.cast_rays(scatter),
-             lambda: o3s.cast_rays(T(scatter))),
-            ("test_occlusions, shadow", lambda: ours.test_occlusions(shadow, tfar=1.0),
-             lambda: o3s.test_occlusions(T(shadow), tfar=1.0)),
-            ("count_intersections, primary", lambda: ours.count_intersections(primary),
-             lambda: o3s.count_intersections(T(primary))),
-            ("compute_closest_points", lambda: ours.compute_closest_points(pts),
-             lambda: o3s.compute_closest_points(T(pts))),
-            ("compute_signed_distance", lambda: ours.compute_signed_distance(spts),
-             lambda: o3s.compute_signed_distance(T(spts))),
+            ("cast_rays, primary", "cast_rays", primary, lambda: ids(primary)),
+            ("cast_rays, scattered", "cast_rays", scatter, lambda: ids(scatter)),
+            ("test_occlusions, shadow", "test_occlusions", shadow,
+             lambda: ours.test_occlusions(shadow, tfar=1.0)),
+            ("count_intersections, primary", "count_intersections", primary,
+             lambda: ours.count_intersections(primary)),
+            ("closest points", "closest_points", pts, lambda: ours.compute_distance(pts)),
+            ("signed distance", "signed_distance", spts,
+             lambda: ours.compute_signed_distance(spts)),
         ]
-        print("| query | rt_accel s | open3d s | ratio | answers |")
-        print("| --- | ---: | ---: | ---: | --- |")
-        for label, a, b in rows:
+        peers = {}
+        for peer, make in PEERS.items():
+            try:
+                peers[peer] = make(v, t)
+            except ImportError as e:
+                print(f"{peer}: skipped: not installed ({e})")
+        print("| query | rt_accel s | peer | peer s | ratio | answers |")
+        print("| --- | ---: | --- | ---: | ---: | --- |")
+        for label, query, data, a in rows:
             ta, ra = best(a, args.repeats)
-            tb, rb = best(b, args.repeats)
-            if isinstance(rb, dict):
-                rb = {k: x.numpy() for k, x in rb.items()}
-            else:
-                rb = rb.numpy()
-            if label.startswith("cast_rays"):
-                same = np.mean(ra["primitive_ids"] == rb["primitive_ids"])
-                note = f"same triangle on {same:.4%}"
-            elif label.startswith("test_occlusions"):
-                note = f"same answer on {np.mean(ra == rb.astype(bool)):.4%}"
-            elif label.startswith("count"):
-                note = f"same count on {np.mean(ra == rb):.4%}"
-            elif label.startswith("compute_closest"):
-                d = np.abs(np.linalg.norm(ra["points"] - pts, axis=1)
-                           - np.linalg.norm(rb["points"] - pts, axis=1))
-                note = f"distances within 1e-5: {np.mean(d <= 1e-5 * (1 + np.abs(ra['points']).max())):.4%}"
-            else:
-                wrong = int(np.sum((ra < 0) != (rb < 0)))
-                note = f"signs differ on {wrong} of {len(spts)} points (rt_accel's by winding number)"
-            print(f"| {label} | {ta:.4f} | {tb:.4f} | {tb / ta:.2f} | {note} |")
+            if query == "cast_rays":
+                ra = missed_as(ra, miss)
+            for peer, queries in peers.items():
+                if query not in queries:
+                    continue
+                tb, rb = best(lambda: queries[query](data), args.repeats)
+                if query == "cast_rays":
+                    note = f"same triangle on {np.mean(ra == rb):.4%}"
+                elif query in ("test_occlusions", "count_intersections"):
+                    note = f"same answer on {np.mean(ra == rb):.4%}"
+                elif query == "closest_points":
+                    d = np.abs(ra - rb)
+                    note = f"distances within 1e-5: {np.mean(d <= 1e-5 * (1 + np.abs(data).max())):.4%}"
+                else:
+                    wrong = int(np.sum((ra < 0) != (rb < 0)))
+                    note = f"signs differ on {wrong} of {len(data)} points"
+                print(f"| {label} | {ta:.4f} | {peer} | {tb:.4f} | {tb / ta:.2f} | {note} |")
 
 
 if __name__ == "__main__":

@@ -375,8 +375,10 @@ class Scene:
         """The distance from each point to the scene, negative inside: float32 ``(...)``.
 
         Inside means a generalised winding number of the scene's triangles above one half
-        (Jacobson et al. 2013), computed by Barill et al.'s fast expansion where its error bound
-        decides the side and exactly where it does not. On a closed, consistently oriented mesh
+        (Jacobson et al. 2013), counted exactly by the crossings of one ray with the mesh and
+        caps over its holes (less the caps' own winding number), and where no ray can be
+        counted, computed by Barill et al.'s fast expansion where its error bound decides the
+        side and exactly where it does not. On a closed, consistently oriented mesh
         that is the mesh's inside; on a mesh with holes it is still well defined, where Open3D's
         sign (the parity of one ray's crossings) depends on where that ray leaves.
 

@@ -312,7 +312,7 @@ pub(crate) fn closest(
 ) -> PyResult<Closest> {
     let mut near: Vec<Option<PointHit>> = vec![None; points.len()];
     with_structure!(&built.structure, a => {
-        fill(points, &mut near, |&p| a.closest_point(p, f32::INFINITY))
+        rt_core::batch::closest_points(a, points, f32::INFINITY, &mut near)
     });
     consistent(&near, |h| h.map(|h| h.prim), tris.len())?;
     let inside = winding.map(|w| {

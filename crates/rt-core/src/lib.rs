@@ -91,6 +91,7 @@
 
 mod aabb;
 mod accel;
+pub mod batch;
 mod brute;
 pub mod bundle;
 mod clip;

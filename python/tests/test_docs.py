@@ -32,7 +32,8 @@ def test_the_pages_have_snippets():
 def test_snippet_runs(name, code, monkeypatch):
     shared_meshes()  # the snippets read the bunny
     monkeypatch.chdir(ROOT)
-    exec(compile(code, name, "exec"), {"__name__": "__snippet__"})
+    # Run as a script runs, so that a snippet's `if __name__ == "__main__":` part runs too.
+    exec(compile(code, name, "exec"), {"__name__": "__main__"})
 
 
 def test_docstring_examples():

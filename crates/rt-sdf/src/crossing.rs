@@ -423,6 +423,40 @@ mod tests {
         assert!(given_up > 0 && given_up < total, "{given_up} of {total}");
     }
 
+    /// The certified orientations hold at every scale and far from the origin: a holed sphere
+    /// with a sphere inside it, shrunk, grown and moved, answers as the exact sum does.
+    #[test]
+    fn signs_stay_exact_at_every_scale_and_offset() {
+        let mut rng = Rng::new(8);
+        for (scale, offset) in [
+            (1e-20f32, 0.0f32),
+            (1e20, 0.0),
+            (1.0, 1e6),
+            (1e-3, 1e4),
+            (1e15, -1e20),
+        ] {
+            let mut tris = sphere(Vec3::ZERO, 1.0, 10, 20);
+            tris.drain(..25);
+            tris.extend(sphere(Vec3::new(0.5, 0.0, 0.0), 0.5, 6, 12));
+            let at = |v: Vec3| v * scale + Vec3::splat(offset);
+            let tris: Vec<Triangle> = tris
+                .iter()
+                .map(|t| Triangle::new(at(t.v0), at(t.v1), at(t.v2)))
+                .collect();
+            let tree = WindingTree::build(&tris).unwrap();
+            let mut decided = 0;
+            for _ in 0..300 {
+                let p = at(Vec3::new(rng.f32(), rng.f32(), rng.f32()) * 3.0 - Vec3::splat(1.5));
+                let exact = tree.winding_number(p, 0.0).value;
+                if (exact - 0.5).abs() > 1e-6 {
+                    decided += 1;
+                    assert_eq!(tree.is_inside(p), exact > 0.5, "×{scale} +{offset}: {p}");
+                }
+            }
+            assert!(decided > 200, "×{scale} +{offset}: {decided}");
+        }
+    }
+
     #[test]
     fn caps_close_every_unmatched_edge_and_a_soup_gets_none() {
         let mut rng = Rng::new(5);

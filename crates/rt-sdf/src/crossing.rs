@@ -44,15 +44,14 @@ use crate::winding::WindingTree;
 use glam::{DVec3, Vec3};
 use std::collections::HashMap;
 
+// PERF: `is_inside` at 10,000 points (half in the box grown by a quarter, half near the
+// surface; AMD Zen 3, one thread), the tree's evaluation alone ÷ crossings with caps, best
+// of two alternated runs: closed meshes (no caps) 12–22×; bunny (223 caps) 9.7×; suzanne
+// (42) 6.6×; the shared teapot (160) 4.5×; the built-in teapot (912) 3.1×; terrain (896)
+// 9.0×; woody (119) 1.3×; beetle (1,136) 1.3×; alligator (433, an open sheet) 0.99×. A
+// soup of 20,000 triangles (60,000 caps) with caps: 0.43×.
 /// Cap triangles a tree keeps at least: see the [module documentation](self). Above this,
 /// it keeps caps while they are at most a quarter as many as the mesh's triangles.
-///
-/// PERF: `is_inside` at 10,000 points (half in the box grown by a quarter, half near the
-/// surface; AMD Zen 3, one thread), the tree's evaluation alone ÷ crossings with caps, best
-/// of two alternated runs: closed meshes (no caps) 12–22×; bunny (223 caps) 9.7×; suzanne
-/// (42) 6.6×; the shared teapot (160) 4.5×; the built-in teapot (912) 3.1×; terrain (896)
-/// 9.0×; woody (119) 1.3×; beetle (1,136) 1.3×; alligator (433, an open sheet) 0.99×. A
-/// soup of 20,000 triangles (60,000 caps) with caps: 0.43×.
 pub(crate) const MAX_CAPS: usize = 256;
 
 /// Shewchuk's `ε`: half an ulp of 1 in `f64`.

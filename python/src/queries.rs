@@ -5,12 +5,12 @@ use crate::scene::{Built, Structure, with_structure};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
 use rayon::prelude::*;
+use rt_core::batch::{self, CHUNK, FlatRays, FlatRaysError};
+use rt_core::bytemuck::cast_slice_mut;
 use rt_core::glam::{DVec3, Vec3};
-use rt_core::{Aabb, Accel, Hit, PointHit, Ray, Triangle};
+use rt_core::{Aabb, Accel, Hit, PointHit, Triangle};
 use rt_sdf::WindingTree;
-
-/// Rays or points per rayon task.
-const CHUNK: usize = 256;
+use std::sync::atomic::{AtomicU32, Ordering};
 
 /// Runs `f` on a pool of `nthreads` threads, or on rayon's global pool (every core) for 0.
 pub(crate) fn pool<R: Send>(nthreads: usize, f: impl FnOnce() -> R + Send) -> PyResult<R> {
@@ -37,44 +37,24 @@ fn index(mut i: usize, shape: &[usize]) -> String {
     format!("[{}]", at.join(", "))
 }
 
-/// Why ray `r` is refused, or `None` when it is valid.
-fn ray_fault(r: &Ray) -> Option<&'static str> {
-    if r.is_valid() {
-        return None;
-    }
-    let d = r.dir().abs().max_element();
-    Some(if !(r.origin.is_finite() && r.dir().is_finite()) {
-        "has a non-finite coordinate"
-    } else if r.origin.abs().max_element() > Ray::MAX_ORIGIN {
-        "has an origin coordinate beyond 2**40 in magnitude"
-    } else if d < *Ray::DIR_RANGE.start() {
-        "has a zero direction (every component below 2**-40 in magnitude)"
-    } else {
-        "has a direction component beyond 2**40 in magnitude (scale the direction down)"
+/// The rays of `(n, 6)` rows `ox oy oz dx dy dz` over `[tnear, tfar]`, made a chunk at a time
+/// as the queries read them; an invalid one is a `ValueError` naming the first.
+pub(crate) fn rays<'a>(
+    flat: &'a [f32],
+    tnear: f32,
+    tfar: f32,
+    shape: &[usize],
+) -> PyResult<FlatRays<'a>> {
+    FlatRays::new(flat, tnear, tfar).map_err(|e| {
+        PyValueError::new_err(match e {
+            FlatRaysError::Invalid { row, fault } => format!(
+                "rays{} {fault}: {:?}",
+                index(row, shape),
+                &flat[6 * row..6 * row + 6]
+            ),
+            FlatRaysError::Ragged { .. } => format!("rays: {e}"),
+        })
     })
-}
-
-/// The rays of `(n, 6)` rows `ox oy oz dx dy dz` over `[tnear, tfar]`; an invalid one is a
-/// `ValueError` naming the first.
-pub(crate) fn rays(flat: &[f32], tnear: f32, tfar: f32, shape: &[usize]) -> PyResult<Vec<Ray>> {
-    let make = |r: &[f32]| {
-        Ray::with_interval(
-            Vec3::new(r[0], r[1], r[2]),
-            Vec3::new(r[3], r[4], r[5]),
-            tnear,
-            tfar,
-        )
-    };
-    let rays: Vec<Ray> = flat.par_chunks_exact(6).map(make).collect();
-    if let Some(i) = rays.par_iter().position_first(|r| !r.is_valid()) {
-        let why = ray_fault(&rays[i]).unwrap_or("is invalid");
-        return Err(PyValueError::new_err(format!(
-            "rays{} {why}: {:?}",
-            index(i, shape),
-            &flat[6 * i..6 * i + 6]
-        )));
-    }
-    Ok(rays)
 }
 
 /// The points of `(n, 3)` rows; a non-finite one is a `ValueError` naming the first.
@@ -118,47 +98,68 @@ pub(crate) fn cast(
     built: &Built,
     tris: &[Triangle],
     offsets: &[u32],
-    rays: &[Ray],
+    rays: &FlatRays,
 ) -> PyResult<Cast> {
-    let mut hits: Vec<Option<Hit>> = vec![None; rays.len()];
-    // The structures' bundles: coherent runs of rays (a camera's, in image order) walk
-    // together, and rays that spread go singly, with the same answers either way.
-    // PERF: AMD Zen 3, two threads, `python/bench/peers.py --repeats 5` (1024×768 views the mesh
-    // fills, 57-67% hit), time of Open3D 0.20's `cast_rays` ÷ ours on the bunny, spot and the
-    // rocker arm: 0.71, 0.90, 0.95 with single rays and the answers laid out on one thread;
-    // 1.34, 1.65, 1.84 with bundles and the layout below on every thread. Scattered rays:
-    // 0.71, 0.78, 0.86 before, 0.69, 0.79, 0.86 after. Shadow rays (`occluded_bundle`):
-    // 1.03, 1.17, 1.04 before, 1.68, 1.64, 1.86 after.
-    with_structure!(&built.structure, a => fill_chunks(rays, &mut hits, |r, o| a.intersect_bundle(r, o)));
-    consistent(&hits, |h| h.map(|h| h.prim), tris.len())?;
     let n = rays.len();
+    // Zeroed storage is mapped lazily and each thread writes every slot of its chunks, so the
+    // pages are first touched by the threads that fill them; the rays are made a chunk at a
+    // time on the stack, and the hits laid out from a buffer there.
+    // PERF: AMD Zen 3, two threads, `python/bench/peers.py --repeats 3`, time of Open3D 0.20's
+    // `cast_rays` ÷ ours on the bunny, spot and the rocker arm. Primary rays (1024×768 views
+    // the mesh fills, 57-67% hit): 0.90, 1.72, 1.42 with a list of rays, a list of hits and
+    // outputs first written on one thread (a third of the time was the kernel's, mapping and
+    // clearing those pages); 1.53, 1.53, 1.65 as here. Scattered rays: 0.86, 0.82, 0.92 before,
+    // 0.94, 1.08, 0.91 after.
     let mut out = Cast {
-        t: vec![f32::INFINITY; n],
-        geometry: vec![u32::MAX; n],
-        primitive: vec![u32::MAX; n],
+        t: vec![0.0; n],
+        geometry: vec![0; n],
+        primitive: vec![0; n],
         uv: vec![0.0; 2 * n],
         normal: vec![0.0; 3 * n],
     };
-    (
-        out.t.par_chunks_mut(CHUNK),
-        out.geometry.par_chunks_mut(CHUNK),
-        out.primitive.par_chunks_mut(CHUNK),
-        out.uv.par_chunks_mut(2 * CHUNK),
-        out.normal.par_chunks_mut(3 * CHUNK),
-        hits.par_chunks(CHUNK),
-    )
-        .into_par_iter()
-        .for_each(|(t, geometry, primitive, uv, normal, hits)| {
-            for (i, hit) in hits.iter().enumerate() {
-                if let Some(h) = hit {
-                    (t[i], (geometry[i], primitive[i])) = (h.t, locate(offsets, h.prim));
-                    uv[2 * i..2 * i + 2].copy_from_slice(&[h.u, h.v]);
-                    let n = unit_normal(&tris[h.prim as usize]);
-                    normal[3 * i..3 * i + 3].copy_from_slice(&n.to_array());
+    let unknown = AtomicU32::new(u32::MAX);
+    let slots = (
+        &mut out.t[..],
+        &mut out.geometry[..],
+        &mut out.primitive[..],
+        cast_slice_mut::<f32, [f32; 2]>(&mut out.uv),
+        cast_slice_mut::<f32, [f32; 3]>(&mut out.normal),
+    );
+    // The structures' bundles: coherent runs of rays (a camera's, in image order) walk
+    // together, and rays that spread go singly, with the same answers either way.
+    // PERF: (the same bench, before the change above) bundles ÷ single rays with the layout on
+    // one thread, Open3D's time ÷ ours: primary 0.71, 0.90, 0.95 -> 1.34, 1.65, 1.84; shadow
+    // rays (`occluded_bundle`) 1.03, 1.17, 1.04 -> 1.68, 1.64, 1.86.
+    with_structure!(&built.structure, a => batch::for_each_ray_chunk(rays, slots, |rays, (t, g, p, uv, normal)| {
+        let mut hits = [None; CHUNK];
+        let hits = &mut hits[..rays.len()];
+        a.intersect_bundle(rays, hits);
+        for (i, hit) in hits.iter().enumerate() {
+            match hit.filter(|h| (h.prim as usize) < tris.len()) {
+                Some(h) => {
+                    (t[i], (g[i], p[i])) = (h.t, locate(offsets, h.prim));
+                    uv[i] = [h.u, h.v];
+                    normal[i] = unit_normal(&tris[h.prim as usize]).to_array();
+                }
+                None => {
+                    if let Some(h) = hit {
+                        unknown.fetch_min(h.prim, Ordering::Relaxed);
+                    }
+                    (t[i], g[i], p[i]) = (f32::INFINITY, u32::MAX, u32::MAX);
                 }
             }
-        });
-    Ok(out)
+        }
+    }));
+    match unknown.into_inner() {
+        u32::MAX => Ok(out),
+        p => Err(inconsistent(p, tris.len())),
+    }
+}
+
+fn inconsistent(p: u32, len: usize) -> PyErr {
+    PyValueError::new_err(format!(
+        "the scene is inconsistent: its structure answered triangle {p}, but it has {len}"
+    ))
 }
 
 /// Checks that every triangle a structure answered with is one of the scene's: always so for a
@@ -173,9 +174,7 @@ fn consistent<T: Sync>(
         .filter_map(prim)
         .find_any(|&p| p as usize >= len)
     {
-        Some(p) => Err(PyValueError::new_err(format!(
-            "the scene is inconsistent: its structure answered triangle {p}, but it has {len}"
-        ))),
+        Some(p) => Err(inconsistent(p, len)),
         None => Ok(()),
     }
 }
@@ -192,9 +191,14 @@ pub(crate) struct Listed {
     pub uv: Vec<f32>,
 }
 
-pub(crate) fn list(built: &Built, offsets: &[u32], len: usize, rays: &[Ray]) -> PyResult<Listed> {
+pub(crate) fn list(
+    built: &Built,
+    offsets: &[u32],
+    len: usize,
+    rays: &FlatRays,
+) -> PyResult<Listed> {
     let mut hits: Vec<Vec<Hit>> = vec![Vec::new(); rays.len()];
-    with_structure!(&built.structure, a => fill(rays, &mut hits, |r| a.all_hits(r)));
+    with_structure!(&built.structure, a => batch::all_hits(a, rays, &mut hits));
     consistent(&hits, |h: &Vec<Hit>| h.iter().map(|h| h.prim).max(), len)?;
     let total: usize = hits.iter().map(Vec::len).sum();
     if total >= u32::MAX as usize {
@@ -252,7 +256,7 @@ pub(crate) fn overlapping(
     boxes: &[Aabb],
 ) -> PyResult<(Vec<u32>, Vec<u32>, Vec<u32>)> {
     let mut found: Vec<Vec<u32>> = vec![Vec::new(); boxes.len()];
-    with_structure!(&built.structure, a => fill(boxes, &mut found, |b| a.overlapping(b)));
+    with_structure!(&built.structure, a => batch::overlapping(a, boxes, &mut found));
     consistent(&found, |ids: &Vec<u32>| ids.last().copied(), len)?;
     let total: usize = found.iter().map(Vec::len).sum();
     if total >= u32::MAX as usize {
@@ -274,18 +278,20 @@ pub(crate) fn overlapping(
     Ok((splits, geometry, primitive))
 }
 
-pub(crate) fn occluded(built: &Built, rays: &[Ray]) -> Vec<bool> {
+pub(crate) fn occluded(built: &Built, rays: &FlatRays) -> Vec<bool> {
     let mut out = vec![false; rays.len()];
-    with_structure!(&built.structure, a => fill_chunks(rays, &mut out, |r, o| a.occluded_bundle(r, o)));
+    with_structure!(&built.structure, a => batch::occluded(a, rays, &mut out));
     out
 }
 
-pub(crate) fn count(built: &Built, rays: &[Ray]) -> Vec<i32> {
+pub(crate) fn count(built: &Built, rays: &FlatRays) -> Vec<i32> {
     let mut out = vec![0; rays.len()];
     // A scene holds fewer than 2**32 - 1 triangles, but a count past i32::MAX saturates
     // rather than wraps (Open3D's counts are int32).
-    with_structure!(&built.structure, a => fill(rays, &mut out, |r| {
-        i32::try_from(a.count_hits(r)).unwrap_or(i32::MAX)
+    with_structure!(&built.structure, a => batch::for_each_ray_chunk(rays, &mut out[..], |rays, out| {
+        for (o, r) in out.iter_mut().zip(rays) {
+            *o = i32::try_from(a.count_hits(r)).unwrap_or(i32::MAX);
+        }
     }));
     out
 }
@@ -310,51 +316,83 @@ pub(crate) fn closest(
     points: &[Vec3],
     winding: Option<&WindingTree>,
 ) -> PyResult<Closest> {
-    let mut near: Vec<Option<PointHit>> = vec![None; points.len()];
-    with_structure!(&built.structure, a => {
-        rt_core::batch::closest_points(a, points, f32::INFINITY, &mut near)
-    });
-    consistent(&near, |h| h.map(|h| h.prim), tris.len())?;
-    let inside = winding.map(|w| {
-        let mut inside = vec![false; points.len()];
-        fill(points, &mut inside, |&p| w.is_inside(p));
-        inside
-    });
     let n = points.len();
+    let mut near: Vec<Option<PointHit>> = vec![None; n];
+    let inside = match winding {
+        Some(w) => {
+            let mut signed = vec![None; n];
+            with_structure!(&built.structure, a => {
+                rt_sdf::batch::signed_distances(a, w, points, f32::INFINITY, &mut signed)
+            });
+            let mut inside = vec![false; n];
+            batch::for_each_chunk(
+                &signed,
+                (&mut near[..], &mut inside[..]),
+                |s, (near, inside)| {
+                    for (s, (n, i)) in s.iter().zip(near.iter_mut().zip(inside)) {
+                        (*n, *i) = (s.map(|s| s.near), s.is_some_and(|s| s.inside));
+                    }
+                },
+            );
+            Some(inside)
+        }
+        None => {
+            with_structure!(&built.structure, a => {
+                batch::closest_points(a, points, f32::INFINITY, &mut near)
+            });
+            None
+        }
+    };
+    consistent(&near, |h| h.map(|h| h.prim), tris.len())?;
+    // Zeroed and then written in every slot, on every thread, as `cast` does.
     let mut out = Closest {
-        point: vec![f32::NAN; 3 * n],
-        geometry: vec![u32::MAX; n],
-        primitive: vec![u32::MAX; n],
+        point: vec![0.0; 3 * n],
+        geometry: vec![0; n],
+        primitive: vec![0; n],
         uv: vec![0.0; 2 * n],
         normal: vec![0.0; 3 * n],
-        distance: vec![f32::INFINITY; n],
+        distance: vec![0.0; n],
         inside,
     };
-    for (i, near) in near.iter().enumerate() {
-        // Every valid point has a nearest triangle in a scene that has one.
-        if let Some(h) = near {
-            let (g, p) = locate(offsets, h.prim);
-            let tri = &tris[h.prim as usize];
-            out.point[3 * i..3 * i + 3].copy_from_slice(&h.point.to_array());
-            out.geometry[i] = g;
-            out.primitive[i] = p;
-            out.uv[2 * i..2 * i + 2].copy_from_slice(&barycentric(tri, h.point));
-            out.normal[3 * i..3 * i + 3].copy_from_slice(&unit_normal(tri).to_array());
-            out.distance[i] = h.distance;
+    let slots = (
+        cast_slice_mut::<f32, [f32; 3]>(&mut out.point),
+        &mut out.geometry[..],
+        &mut out.primitive[..],
+        cast_slice_mut::<f32, [f32; 2]>(&mut out.uv),
+        cast_slice_mut::<f32, [f32; 3]>(&mut out.normal),
+        &mut out.distance[..],
+    );
+    batch::for_each_chunk(&near, slots, |near, (point, g, p, uv, normal, distance)| {
+        for (i, near) in near.iter().enumerate() {
+            // Every valid point has a nearest triangle in a scene that has one.
+            match near {
+                Some(h) => {
+                    let tri = &tris[h.prim as usize];
+                    point[i] = h.point.to_array();
+                    (g[i], p[i]) = locate(offsets, h.prim);
+                    uv[i] = barycentric(tri, h.point);
+                    normal[i] = unit_normal(tri).to_array();
+                    distance[i] = h.distance;
+                }
+                None => {
+                    point[i] = [f32::NAN; 3];
+                    (g[i], p[i], distance[i]) = (u32::MAX, u32::MAX, f32::INFINITY);
+                }
+            }
         }
-    }
+    });
     Ok(out)
 }
 
 pub(crate) fn winding(winding: &WindingTree, points: &[Vec3]) -> Vec<f64> {
     let mut out = vec![0.0; points.len()];
-    fill(points, &mut out, |&p| winding.winding_number(p, 1e-9).value);
+    rt_sdf::batch::winding_numbers(winding, points, 1e-9, &mut out);
     out
 }
 
 pub(crate) fn inside(winding: &WindingTree, points: &[Vec3]) -> Vec<bool> {
     let mut out = vec![false; points.len()];
-    fill(points, &mut out, |&p| winding.is_inside(p));
+    rt_sdf::batch::inside(winding, points, &mut out);
     out
 }
 
@@ -376,20 +414,4 @@ fn barycentric(t: &Triangle, p: Vec3) -> [f32; 2] {
     let u = (d11 * d20 - d01 * d21) / det;
     let v = (d00 * d21 - d01 * d20) / det;
     [u as f32, v as f32]
-}
-
-/// `out[i] = f(&items[i])` on rayon's threads, in chunks.
-fn fill<T: Sync, R: Send>(items: &[T], out: &mut [R], f: impl Fn(&T) -> R + Sync) {
-    fill_chunks(items, out, |items, out| {
-        for (o, item) in out.iter_mut().zip(items) {
-            *o = f(item);
-        }
-    });
-}
-
-/// `f(items, out)` over matching chunks of both, on rayon's threads.
-fn fill_chunks<T: Sync, R: Send>(items: &[T], out: &mut [R], f: impl Fn(&[T], &mut [R]) + Sync) {
-    out.par_chunks_mut(CHUNK)
-        .zip(items.par_chunks(CHUNK))
-        .for_each(|(out, items)| f(items, out));
 }

@@ -57,6 +57,13 @@
 //! [`bundle::intersect_image`] a frame whose rays come in image order, bundled by tiles. See the
 //! [`bundle`] module.
 //!
+//! # Every query in batches
+//! The [`batch`] module answers many rays, points or boxes in one call on every thread of the
+//! current rayon pool (a smaller pool limits the threads): closest and any hits, counts and all
+//! hits of rays given as [`Ray`]s or as flat rows of six numbers ([`batch::FlatRays`]), closest
+//! points in the Morton order that shares the cache, box overlaps, and answers laid out as the
+//! caller wants them.
+//!
 //! # Closest points
 //! [`Accel::closest_point`] finds the primitive nearest to a point (a [`PointHit`]: index, point,
 //! distance). Structures implement one traversal, [`Accel::ball_query`], over a [`BallQuery`]
@@ -81,7 +88,8 @@
 //!
 //! # Features
 //! - `parallel` (off here; the structure crates turn it on by default): the builders' parallel
-//!   patterns ([`par`]) and [`bundle::intersect_frame`] run on rayon's threads. Without it they
+//!   patterns ([`par`]), [`bundle::intersect_frame`] and the [`batch`] queries run on rayon's
+//!   threads. Without it they
 //!   run in order on the calling thread and give the same answers.
 //!
 //! Measurements of every structure are on the generated results pages, one per machine kind,
@@ -136,7 +144,7 @@ pub use point::{
 };
 pub use primitive::{Primitive, TriangleTest, valid_bounds, valid_primitives};
 pub use query::{AllHits, AnyHit, ClosestHit, CountHits, Filtered, RayQuery};
-pub use ray::Ray;
+pub use ray::{Ray, RayFault};
 pub use refit::{Refit, RefitError};
 pub use rng::Rng;
 pub use shape::Shape;

@@ -171,6 +171,33 @@ impl Ray {
             & (self.t_min <= self.t_max)
     }
 
+    /// Why the ray is not [valid](Ray::is_valid), the first reason of the checks' order, or
+    /// `None` when it is.
+    ///
+    /// ```
+    /// use rt_core::{Ray, RayFault, glam::Vec3};
+    /// assert_eq!(Ray::new(Vec3::ZERO, Vec3::X).fault(), None);
+    /// assert_eq!(Ray::new(Vec3::ZERO, Vec3::ZERO).fault(), Some(RayFault::ZeroDirection));
+    /// assert_eq!(Ray::new(Vec3::NAN, Vec3::X).fault(), Some(RayFault::NonFinite));
+    /// ```
+    pub fn fault(&self) -> Option<RayFault> {
+        if self.is_valid() {
+            return None;
+        }
+        let d = self.dir.abs().max_element();
+        Some(if !(self.origin.is_finite() && self.dir.is_finite()) {
+            RayFault::NonFinite
+        } else if self.origin.abs().max_element() > Self::MAX_ORIGIN {
+            RayFault::OriginTooFar
+        } else if d < *Self::DIR_RANGE.start() {
+            RayFault::ZeroDirection
+        } else if d > *Self::DIR_RANGE.end() {
+            RayFault::DirectionTooLong
+        } else {
+            RayFault::Interval
+        })
+    }
+
     /// Formats the ray as one line of a rays file (`ox oy oz dx dy dz tmin tmax`), with every
     /// float printed so that it parses back to the same bits.
     pub fn to_line(&self) -> String {
@@ -201,6 +228,37 @@ impl Ray {
                 format!("{:?}", self.t_max)
             }
         )
+    }
+}
+
+/// Why a ray is not valid ([`Ray::fault`]); its `Display` says it in words.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum RayFault {
+    /// An origin or direction coordinate is NaN or infinite.
+    NonFinite,
+    /// An origin coordinate lies beyond [`Ray::MAX_ORIGIN`] in magnitude.
+    OriginTooFar,
+    /// Every direction component lies below [`Ray::DIR_RANGE`] in magnitude.
+    ZeroDirection,
+    /// A direction component lies beyond [`Ray::DIR_RANGE`] in magnitude.
+    DirectionTooLong,
+    /// The interval is not `0 <= t_min <= t_max` with `t_min` finite.
+    Interval,
+}
+
+impl std::fmt::Display for RayFault {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Self::NonFinite => "has a non-finite coordinate",
+            Self::OriginTooFar => "has an origin coordinate beyond 2**40 in magnitude",
+            Self::ZeroDirection => {
+                "has a zero direction (every component below 2**-40 in magnitude)"
+            }
+            Self::DirectionTooLong => {
+                "has a direction component beyond 2**40 in magnitude (scale the direction down)"
+            }
+            Self::Interval => "has an interval that is not 0 <= tnear <= tfar with tnear finite",
+        })
     }
 }
 

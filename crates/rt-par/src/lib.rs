@@ -225,6 +225,97 @@ pub fn extend_range<T: Send>(
     }
 }
 
+/// Output storage that a batch splits among threads: a slice, one slot per item, or a tuple of
+/// up to six slices of the same length (one array per field of an answer, as numpy callers
+/// want them). Each piece of a split owns its slots, so threads write them without locks.
+pub trait Slots: Send + Sized {
+    /// How many items the storage holds slots for (the shortest slice's length for a tuple).
+    fn slots(&self) -> usize;
+    /// The slots of items `..mid` and of items `mid..`.
+    fn split_at(self, mid: usize) -> (Self, Self);
+}
+
+impl<T: Send> Slots for &mut [T] {
+    #[inline]
+    fn slots(&self) -> usize {
+        self.len()
+    }
+
+    #[inline]
+    fn split_at(self, mid: usize) -> (Self, Self) {
+        self.split_at_mut(mid)
+    }
+}
+
+macro_rules! slots_tuple {
+    ($($s:ident $i:tt),+) => {
+        impl<$($s: Slots),+> Slots for ($($s,)+) {
+            #[inline]
+            fn slots(&self) -> usize {
+                [$(self.$i.slots()),+].into_iter().min().unwrap_or(0)
+            }
+
+            #[inline]
+            #[allow(non_snake_case)]
+            fn split_at(self, mid: usize) -> (Self, Self) {
+                $(let $s = self.$i.split_at(mid);)+
+                (($($s.0,)+), ($($s.1,)+))
+            }
+        }
+    };
+}
+slots_tuple!(A 0, B 1);
+slots_tuple!(A 0, B 1, C 2);
+slots_tuple!(A 0, B 1, C 2, D 3);
+slots_tuple!(A 0, B 1, C 2, D 3, E 4);
+slots_tuple!(A 0, B 1, C 2, D 3, E 4, F 5);
+
+/// `f(range, slots)` for consecutive ranges of at most `size` items covering `0..n`, where
+/// `n` is the number of items `out` holds slots for, each call given the slots of its range.
+/// The ranges start at multiples of `size`. On rayon's threads by halving (with the feature
+/// `parallel` and a pool of more than one thread), else in order on the calling thread.
+pub fn split_slots<S: Slots>(out: S, size: usize, f: impl Fn(Range<usize>, S) + Sync + Send) {
+    let size = size.max(1);
+    let n = out.slots();
+    if n == 0 {
+        return;
+    }
+    #[cfg(feature = "parallel")]
+    if threads() > 1 {
+        split_join(0, n, out, size, &f);
+        return;
+    }
+    let mut rest = out;
+    let mut start = 0;
+    while start < n {
+        let end = (start + size).min(n);
+        let (here, after) = rest.split_at(end - start);
+        f(start..end, here);
+        (start, rest) = (end, after);
+    }
+}
+
+#[cfg(feature = "parallel")]
+fn split_join<S: Slots>(
+    start: usize,
+    end: usize,
+    out: S,
+    size: usize,
+    f: &(impl Fn(Range<usize>, S) + Sync + Send),
+) {
+    let chunks = (end - start).div_ceil(size);
+    if chunks <= 1 {
+        let (out, _) = out.split_at(end - start);
+        return f(start..end, out);
+    }
+    let mid = chunks / 2 * size;
+    let (a, b) = out.split_at(mid);
+    rayon::join(
+        || split_join(start, start + mid, a, size, f),
+        || split_join(start + mid, end, b, size, f),
+    );
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -271,6 +362,26 @@ mod tests {
         assert_eq!(out, vec![7, 0, 10, 20, 30]);
         assert_eq!(join(|| 1, || "two"), (1, "two"));
         assert!(threads() >= 1);
+    }
+
+    /// `split_slots` hands each range its own slots, for a slice and a tuple, whatever the
+    /// lengths, and gives a tuple the shortest slice's items.
+    #[test]
+    fn split_slots_cover_every_item_once() {
+        for n in [0, 1, 63, 64, 65, 1000] {
+            let mut a = vec![0usize; n];
+            let mut b = vec![[0u8; 2]; n + 3];
+            split_slots((&mut a[..], &mut b[..]), 64, |r, (a, b)| {
+                assert!(r.start % 64 == 0 && r.len() <= 64 && r.len() == a.len());
+                assert_eq!(a.len(), b.len());
+                for (i, (a, b)) in r.zip(a.iter_mut().zip(b.iter_mut())) {
+                    *a += i + 1;
+                    b[1] += 1;
+                }
+            });
+            assert_eq!(a, (1..=n).collect::<Vec<_>>());
+            assert!(b[..n].iter().all(|b| b == &[0, 1]) && b[n..].iter().all(|b| b == &[0, 0]));
+        }
     }
 }
 

@@ -9,6 +9,8 @@
 //! - [`SignedDistance`], implemented for every [`Accel`], puts that sign on the structure's
 //!   closest-point distance ([`SignedDistance::signed_distance`]), and offers the simple
 //!   alternative that counts the crossings of rays ([`SignedDistance::inside_by_parity`]).
+//! - [`batch`] answers many points at once, on every thread of the current rayon pool: signed
+//!   distances, inside tests and winding numbers.
 //!
 //! The distance comes from the structure's [`Accel::closest_point`], exactly brute force's; the
 //! sign comes from the winding number, which is the same for every structure.
@@ -36,6 +38,7 @@
 //! ```
 #![warn(missing_docs)]
 
+pub mod batch;
 pub mod crossing;
 pub mod winding;
 

@@ -45,7 +45,7 @@
 use crate::crossing::{self, AxisRay};
 use bytemuck::Zeroable;
 use glam::{DVec3, Vec3};
-use rt_core::Primitive;
+use rt_core::{Geometry, Primitive};
 use std::f64::consts::PI;
 
 /// The signed solid angle the triangle `(v0, v1, v2)` subtends at `p`, in steradians, in
@@ -114,9 +114,10 @@ impl std::error::Error for NotATriangle {}
 
 /// The valid triangles of `prims` as vertex triples; invalid primitives (zero area, a
 /// non-finite vertex) are left out, as structures leave them out.
-fn triangles<P: Primitive>(prims: &[P]) -> Result<Vec<[Vec3; 3]>, NotATriangle> {
+fn triangles<G: Geometry + ?Sized>(prims: &G) -> Result<Vec<[Vec3; 3]>, NotATriangle> {
     let mut tris = Vec::with_capacity(prims.len());
-    for (i, p) in prims.iter().enumerate() {
+    for i in 0..prims.len() {
+        let p = prims.prim(i);
         if !p.is_valid() {
             continue;
         }
@@ -359,7 +360,27 @@ impl WindingTree {
     /// # Errors
     /// [`NotATriangle`] for the first valid primitive that is not a triangle.
     pub fn build<P: Primitive>(prims: &[P]) -> Result<Self, NotATriangle> {
-        let tris = triangles(prims)?;
+        Self::build_from(prims)
+    }
+
+    /// The tree over the valid triangles of `geometry`, read in place: a [`Mesh`] or
+    /// [`IndexedTriangles`] as the structures' `Accel::build_from` takes them, with no copy of
+    /// its triangles beforehand.
+    ///
+    /// ```
+    /// use rt_core::{Mesh, glam::Vec3};
+    /// let mesh = Mesh::cuboid(Vec3::ZERO, Vec3::ONE);
+    /// let tree = rt_sdf::WindingTree::build_from(&mesh).unwrap();
+    /// assert!(tree.is_inside(Vec3::splat(0.5)) && !tree.is_inside(Vec3::splat(1.5)));
+    /// ```
+    ///
+    /// [`Mesh`]: rt_core::Mesh
+    /// [`IndexedTriangles`]: rt_core::IndexedTriangles
+    ///
+    /// # Errors
+    /// [`NotATriangle`] for the first valid primitive that is not a triangle.
+    pub fn build_from<G: Geometry + ?Sized>(geometry: &G) -> Result<Self, NotATriangle> {
+        let tris = triangles(geometry)?;
         let caps = crossing::caps(&tris);
         let mut tree = Self::of(tris);
         if caps.len() <= crossing::MAX_CAPS.max(tree.len() / 4) {

@@ -1,6 +1,6 @@
 //! Ball queries (closest point): nearest box first, pruned by the query's shrinking radius.
 
-use crate::node::{ChildRef, WIDTH, WideNode};
+use crate::node::{ChildRef, PACK, TriPack, WIDTH, WideNode};
 use crate::traverse::WIDE_STACK;
 use crate::{Bvh, MAX_DEPTH};
 use rt_core::Stack;
@@ -151,8 +151,20 @@ impl<P: Primitive> Bvh<P> {
             }
             return;
         };
+        let c = q.center();
         for pack in &self.packs()[items] {
-            for lane in 0..pack.len() {
+            let bounds = lower_bounds(pack, test, c);
+            for (lane, &bound) in bounds.iter().enumerate().take(pack.len()) {
+                // A triangle whose box lies outside the ball cannot tie with or beat the best so
+                // far: skipped, as a child box outside the ball is, by the same test.
+                // PERF: AMD Zen 3, one thread, 100,000 points (half in the box grown by a
+                // quarter, half near the surface) in Morton order, median of five alternating
+                // runs in one process (a scratch harness): 1.21-1.35x as fast as testing every
+                // triangle of the leaf (cow, rocker arm, spot, bunny, teapot); 45% fewer exact
+                // tests on the bunny, spot and the rocker arm.
+                if bound > q.radius_sq() {
+                    continue;
+                }
                 stats.prim_test();
                 let row = |k: usize| pack.row(k, lane);
                 // Watertight packs hold the vertices, Möller–Trumbore packs the vertex and
@@ -182,6 +194,32 @@ fn distances(node: &WideNode, c: Vec3) -> [f32; WIDTH] {
             sum += g * g;
         }
         *out = sum;
+    }
+    d
+}
+
+/// For each lane of `pack`, the squared distance from `c` to the triangle's bounding box,
+/// computed as [`distances`] computes a child box's, so a lane beyond the ball is as safely
+/// skipped as a child is: the query's ball is widened past that test's rounding
+/// ([`ClosestPointQuery`](rt_core::ClosestPointQuery)). A Möller–Trumbore pack's vertices
+/// `v0 + e1` and `v0 + e2` are rounded to `f32` here, an error far below that widening. A NaN
+/// bound compares false and skips nothing.
+#[inline(always)]
+fn lower_bounds(pack: &TriPack, test: TriangleTest, c: Vec3) -> [f32; PACK] {
+    let mut d = [0.0f32; PACK];
+    for axis in 0..3 {
+        let r = |k: usize| pack.rows[3 * k + axis];
+        let (v0, r1, r2) = (r(0), r(1), r(2));
+        for lane in 0..PACK {
+            let (a, mut b, mut e) = (v0[lane], r1[lane], r2[lane]);
+            if test == TriangleTest::MollerTrumbore {
+                (b, e) = (a + b, a + e);
+            }
+            let below = a.min(b).min(e) - c[axis];
+            let above = c[axis] - a.max(b).max(e);
+            let g = below.max(above).max(0.0);
+            d[lane] += g * g;
+        }
     }
     d
 }

@@ -16,7 +16,8 @@ Peers, each where it has the query: Open3D's ``RaycastingScene`` (pip package ``
 wheel imports only with Debian's ``libusb-1.0-0``): every query. embreex (Embree 4, as trimesh
 uses it; one thread): rays. libigl (``libigl``): closest points, and signed distance by its
 fast winding number. point-cloud-utils: closest points, and signed distance by fast winding
-numbers. A peer that is not installed is skipped, and the table says so. Ratios are the
+numbers. fcpw: closest points (its answers are read out of its list after the timing). A
+peer that is not installed is skipped, and the table says so. Ratios are the
 peer's time over rt_accel's: above 1, rt_accel is faster. Sign differences are counted against
 rt_accel's, which are the exact winding number's.
 """
@@ -150,8 +151,28 @@ def peer_pcu(v, t):
     }
 
 
+def peer_fcpw(v, t):
+    import fcpw
+
+    scene = fcpw.scene_3D()
+    scene.set_object_count(1)
+    scene.set_object_vertices(np.asfortranarray(v, dtype=np.float32), 0)
+    scene.set_object_triangles(np.asfortranarray(t, dtype=np.int32), 0)
+    scene.build(fcpw.aggregate_type.bvh_surface_area, True)
+
+    def closest(p):
+        found = fcpw.interaction_3D_list()
+        scene.find_closest_points(np.asfortranarray(p, dtype=np.float32),
+                                  np.full(len(p), np.inf, dtype=np.float32), found)
+        return found
+
+    # Reading the answers out of fcpw's list of objects is a Python loop: done after the timing,
+    # so that the time is fcpw's query alone.
+    return {"closest_points": (closest, lambda found: np.array([i.d for i in found]))}
+
+
 PEERS = {"open3d": peer_open3d, "embreex": peer_embreex, "libigl": peer_libigl,
-         "point-cloud-utils": peer_pcu}
+         "point-cloud-utils": peer_pcu, "fcpw": peer_fcpw}
 
 
 def main() -> None:
@@ -164,7 +185,7 @@ def main() -> None:
     ap.add_argument("--points", type=int, default=200_000)
     ap.add_argument("--signed-points", type=int, default=50_000)
     args = ap.parse_args()
-    print(f"# {platform.processor() or platform.machine()}, {os.cpu_count()} threads, "
+    print(f"{platform.processor() or platform.machine()}, {os.cpu_count()} threads, "
           f"best of {args.repeats}; ratio = peer time / rt_accel time")
     rng = np.random.default_rng(1)
     for name in args.meshes.split(","):
@@ -183,7 +204,7 @@ def main() -> None:
         shadow = np.hstack([p, light - p]).astype(np.float32)
         pts = points(v, args.points, rng)
         spts = pts[: args.signed_points]
-        print(f"\n## {name}: {len(t)} triangles; primary {len(primary)} rays, "
+        print(f"\n### {name}: {len(t)} triangles; primary {len(primary)} rays, "
               f"{hit.mean():.1%} hit; scattered {len(scatter)} rays, "
               f"{np.isfinite(ours.cast_rays(scatter)['t_hit']).mean():.1%} hit; "
               f"shadow {len(shadow)} rays; {len(pts)} points")
@@ -205,8 +226,8 @@ def main() -> None:
             try:
                 peers[peer] = make(v, t)
             except ImportError as e:
-                print(f"{peer}: skipped: not installed ({e})")
-        print("| query | rt_accel s | peer | peer s | ratio | answers |")
+                print(f"\n{peer}: skipped: not installed ({e})")
+        print("\n| query | rt_accel s | peer | peer s | ratio | answers |")
         print("| --- | ---: | --- | ---: | ---: | --- |")
         for label, query, data, a in rows:
             ta, ra = best(a, args.repeats)
@@ -215,7 +236,10 @@ def main() -> None:
             for peer, queries in peers.items():
                 if query not in queries:
                     continue
-                tb, rb = best(lambda: queries[query](data), args.repeats)
+                run, post = queries[query] if isinstance(queries[query], tuple) else (
+                    queries[query], lambda answer: answer)
+                tb, rb = best(lambda: run(data), args.repeats)
+                rb = post(rb)
                 if query == "cast_rays":
                     note = f"same triangle on {np.mean(ra == rb):.4%}"
                 elif query in ("test_occlusions", "count_intersections"):

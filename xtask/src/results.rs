@@ -31,7 +31,7 @@ pub struct Args {
     #[arg(short, long)]
     pub out: Option<PathBuf>,
     /// Only write the index `docs/results.md` again from the pages in `docs/results/`.
-    #[arg(long, conflicts_with_all = ["out", "quick", "embree"])]
+    #[arg(long, conflicts_with_all = ["out", "quick", "embree", "python"])]
     pub index: bool,
     /// A small page from small runs on built-in scenes (seconds instead of minutes), to check
     /// the generator itself; its figures measure nothing worth quoting.
@@ -40,6 +40,11 @@ pub struct Args {
     /// Also measure rt-bvh against Embree 3 (needs Debian's libembree-dev).
     #[arg(long)]
     pub embree: bool,
+    /// Also measure the Python package against the Python tools people use (Open3D, embreex,
+    /// libigl, point-cloud-utils, fcpw, those installed) with this Python interpreter: the
+    /// package is installed into its environment from `python/` first.
+    #[arg(long, value_name = "PYTHON")]
+    pub python: Option<PathBuf>,
 }
 
 /// The rows every shootout table shows: each structure's default and the presets the guide
@@ -171,11 +176,12 @@ fn write_index() -> Result<PathBuf, String> {
         "# Results\n\nThe measurements, one page per kind of machine they were made on, so that a \
          run on one CPU never overwrites another's figures: what is fastest differs between CPUs \
          (see the kernel table, `cargo bench -p rt-benches --bench kernels`). Each page is \
-         written by `cargo xtask results --embree` on its machine, stamped with the date, the \
+         written by `cargo xtask results --embree --python PYTHON` on its machine (`PYTHON` \
+         an interpreter whose environment has the Python peers), stamped with the date, the \
          commit, the CPU and its kind, and has the same sections: primary rays, more meshes, \
          other rays, one thread, ray bundles, closest points, signed distance, instances, scale, \
-         dynamic scenes, saved structures, kernels on this CPU, and rt-bvh against Embree 3. \
-         A page older than a section lacks it. Compare figures within one page; across pages, \
+         dynamic scenes, saved structures, kernels on this CPU, rt-bvh against Embree 3, and \
+         rt_accel against the Python tools. A page older than a section lacks it. Compare figures within one page; across pages, \
          compare ratios.\n\n| machine kind | written |\n| --- | --- |\n",
     );
     for page in &pages {
@@ -349,6 +355,9 @@ fn measure_all(args: &Args, out: &Path) -> Result<PathBuf, String> {
     if args.embree {
         page += &embree()?;
     }
+    if let Some(python) = &args.python {
+        page += &python_peers(python)?;
+    }
     let _ = writeln!(
         page,
         "\n---\nAll runs took {:.0} s.",
@@ -416,11 +425,16 @@ fn stamp(args: &Args) -> Result<String, String> {
     }
     let _ = writeln!(
         s,
-        "Written by `cargo xtask results{}{}` on {} (UTC) at commit {commit}{}, on {cpu} \
+        "Written by `cargo xtask results{}{}{}` on {} (UTC) at commit {commit}{}, on {cpu} \
          ({kind}) with {threads} threads, built by {rustc} with the workspace's release profile \
          (`codegen-units = 1`, thin LTO).\n",
         if args.quick { " --quick" } else { "" },
         if args.embree { " --embree" } else { "" },
+        if args.python.is_some() {
+            " --python PYTHON"
+        } else {
+            ""
+        },
         today(),
         if dirty {
             " plus uncommitted changes"
@@ -756,6 +770,42 @@ fn kernels() -> Result<String, String> {
          built-in scene and shared mesh, one thread, passes interleaved, medians; every set's \
          answers equal the portable kernels' bit for bit. The run-time choice \
          (`rt_simd::Isa::detect`) should be the fastest here.\n{tables}"
+    ))
+}
+
+/// The Python package against the Python tools: `python/bench/peers.py`'s own tables, run by
+/// `python` after installing the package from this tree into its environment.
+fn python_peers(python: &Path) -> Result<String, String> {
+    let run = |args: &[&str]| -> Result<(String, String), String> {
+        let command = format!("python {}", args.join(" "));
+        eprintln!("{command}");
+        let out = Command::new(python)
+            .args(args)
+            .output()
+            .map_err(|e| format!("{}: cannot run: {e}", python.display()))?;
+        if !out.status.success() {
+            let err = String::from_utf8_lossy(&out.stderr);
+            let last = err.lines().rev().find(|l| !l.trim().is_empty());
+            return Err(format!(
+                "{command} failed ({}): {}",
+                out.status,
+                last.unwrap_or("")
+            ));
+        }
+        Ok((command, String::from_utf8_lossy(&out.stdout).into_owned()))
+    };
+    let (install, _) = run(&["-m", "pip", "install", "--quiet", "./python"])?;
+    let (command, tables) = run(&["python/bench/peers.py", "--repeats", "3"])?;
+    Ok(format!(
+        "\n## rt_accel against the Python tools\n\n`{install}`, then `{command}`: the Python \
+         package (`rt_accel`, the wide BVH) and the tools Python users have today on the same \
+         triangles, rays and points, every query on all threads where the tool has threads, \
+         best of three, the crossing from Python included on both sides. Primary rays come \
+         from a view each mesh fills (the hit share beside), scattered rays join random points \
+         of the mesh's box, shadow rays go from the primary hits to a light; points lie half \
+         in the box grown by a quarter, half near the surface. Ratios are the tool's time over \
+         rt_accel's (above 1, rt_accel is faster); the last column compares the answers, and \
+         counts the signs that differ from rt_accel's exact winding-number signs.\n\n{tables}"
     ))
 }
 

@@ -58,8 +58,8 @@ pub trait RaySource: Sync {
         self.len() == 0
     }
 
-    /// The rays of `range` (at most [`CHUNK`] of them), made in `buf` if they are not stored
-    /// as rays.
+    /// The rays of `range`, made in `buf` if they are not stored as rays. The batches ask for
+    /// at most [`CHUNK`] at a time; a longer range may panic.
     fn chunk<'a>(&'a self, range: Range<usize>, buf: &'a mut [Ray; CHUNK]) -> &'a [Ray];
 }
 

@@ -23,7 +23,7 @@ Every query releases the GIL and runs on all cores unless ``nthreads`` says othe
 from __future__ import annotations
 
 import math
-from typing import Dict, List, Optional, Tuple
+from typing import Dict, List, Optional, Tuple, Union
 
 import numpy as np
 
@@ -104,20 +104,48 @@ class Scene:
         (no structure: every triangle tested, the reference). All give the same answers.
     preset:
         One of :func:`presets` ``(structure)``; ``None`` is the structure's default.
+    **params:
+        Build parameters set over the preset's, by the names of the structure's Rust
+        parameters (``rt_bvh::BvhParams`` and so on), each checked: a value out of range
+        raises ``ValueError`` naming the range, one of the wrong kind ``TypeError``.
+
+        - ``"bvh"``: ``layout`` (``"wide"``, ``"binary"``), ``split`` (``"sah"``,
+          ``"median"``, ``"middle"``), ``bins`` (2 to 32), ``traversal_cost`` and
+          ``intersection_cost`` (above 0), ``max_leaf_size`` (1 to 255),
+          ``reinsertion_passes`` (0 to 100), ``parallel``.
+        - ``"kdtree"``: ``traversal_cost``, ``intersection_cost``, ``empty_bonus`` and
+          ``empty_cut`` (0 to 1), ``perfect_splits``, ``max_depth`` (1 to 64, or ``None`` for
+          the automatic limit), ``depth_base`` (0 to 64), ``max_bad_refines`` (0 to 64),
+          ``leaf_size``, ``parallel``, ``traversal`` (``"stack"``, ``"restart"``).
+        - ``"grid"``: ``density`` (cells per triangle, above 0 to 64), ``max_cells`` (1 to
+          2**28), ``exact_insertion``, ``mailbox``, ``parallel``.
+        - ``"hgrid"``: ``top_density``, ``density``, ``split_min``, ``max_levels`` (1 to 4),
+          ``max_cells``, ``mailbox``, ``parallel``.
+        - ``"octree"``: ``max_prims``, ``max_depth`` (0 to 20), ``max_refs_per_prim`` (1 to
+          1024), ``mailbox``, ``parallel``.
+
+        Every setting gives the same answers; they change speed and memory. A saved scene
+        keeps them.
 
     The structure is built on the first query after meshes are added, as Open3D's
-    ``RaycastingScene`` does, or when :meth:`build` is called.
+    ``RaycastingScene`` does, or when :meth:`build` is called. ``structure``, ``preset`` and
+    ``params`` (a dict of the parameters given) say what it is.
     """
 
-    def __init__(self, structure: str = "bvh", preset: Optional[str] = None) -> None:
-        self._native = _native.NativeScene(structure, preset)
-        self.structure, self.preset = self._native.describe()
+    def __init__(
+        self,
+        structure: str = "bvh",
+        preset: Optional[str] = None,
+        **params: Union[bool, int, float, str, None],
+    ) -> None:
+        self._native = _native.NativeScene(structure, preset, params)
+        self.structure, self.preset, self.params = self._native.describe()
 
     @classmethod
     def _of(cls, native) -> "Scene":
         scene = cls.__new__(cls)
         scene._native = native
-        scene.structure, scene.preset = native.describe()
+        scene.structure, scene.preset, scene.params = native.describe()
         return scene
 
     def to_bytes(self) -> bytes:
@@ -169,8 +197,9 @@ class Scene:
         return (Scene.from_bytes, (self.to_bytes(),))
 
     def __repr__(self) -> str:
+        params = "".join(f", {k}={v!r}" for k, v in self.params.items())
         return (
-            f"rt_accel.Scene(structure={self.structure!r}, preset={self.preset!r}) "
+            f"rt_accel.Scene(structure={self.structure!r}, preset={self.preset!r}{params}) "
             f"with {self._native.geometry_count()} geometries, "
             f"{self._native.triangle_count()} triangles"
         )

@@ -7,6 +7,7 @@
 //! panics on bad input: every check returns a `ValueError` naming the element.
 
 mod mesh;
+mod params;
 mod queries;
 mod saved;
 mod scene;

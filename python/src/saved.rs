@@ -1,10 +1,12 @@
 //! A scene as bytes: `Scene.save`, `Scene.load` and pickling.
 //!
 //! The file is rt-persist's framing (magic, versions, section table, checksums) with four
-//! sections: the structure's name and preset, the scene's triangles in the order they were
+//! sections: the structure's name, its preset and the parameters given by keyword (a line
+//! each: the name, then the preset, then `key=value` lines), the scene's triangles in the order they were
 //! added, the first triangle of each geometry, and the structure saved by its own
 //! [`Persist`] (which checks itself on load). Loading rebuilds nothing.
 
+use crate::params::Value;
 use crate::scene::{Structure, with_structure};
 use rt_bvh::Bvh;
 use rt_core::{BruteForce, Triangle};
@@ -22,6 +24,7 @@ const LAYOUT: u32 = 1;
 pub(crate) struct Saved {
     pub structure: String,
     pub preset: String,
+    pub overrides: Vec<(String, Value)>,
     pub tris: Vec<Triangle>,
     pub offsets: Vec<u32>,
     pub built: Structure,
@@ -31,12 +34,17 @@ pub(crate) struct Saved {
 pub(crate) fn save(
     structure: &str,
     preset: &str,
+    overrides: &[(String, Value)],
     tris: &[Triangle],
     offsets: &[u32],
     built: &Structure,
 ) -> Vec<u8> {
     let accel = with_structure!(built, a => a.save());
-    let name = format!("{structure}\n{preset}").into_bytes();
+    let mut name = format!("{structure}\n{preset}");
+    for (key, value) in overrides {
+        name += &format!("\n{key}={}", value.text());
+    }
+    let name = name.into_bytes();
     let mut w = Writer::new::<Triangle>(KIND, LAYOUT);
     w.section_owned("name", name);
     w.section("tris", tris);
@@ -59,9 +67,18 @@ pub(crate) fn load(bytes: &[u8]) -> Result<Saved, LoadError> {
     let accel: Vec<u8> = r.section("accel")?;
     r.finish()?;
     let name = String::from_utf8(name).map_err(|_| malformed("the name is not UTF-8".into()))?;
-    let (structure, preset) = name
-        .split_once('\n')
-        .ok_or_else(|| malformed(format!("no preset in the name {name:?}")))?;
+    let mut lines = name.split('\n');
+    let (Some(structure), Some(preset)) = (lines.next(), lines.next()) else {
+        return Err(malformed(format!("no preset in the name {name:?}")));
+    };
+    let overrides = lines
+        .map(|line| {
+            let (key, value) = line
+                .split_once('=')
+                .ok_or_else(|| malformed(format!("a parameter line without '=': {line:?}")))?;
+            Ok((key.to_owned(), Value::parse(value)))
+        })
+        .collect::<Result<Vec<_>, LoadError>>()?;
     if tris.is_empty() || tris.len() >= u32::MAX as usize {
         return Err(malformed(format!("{} triangles", tris.len())));
     }
@@ -96,6 +113,7 @@ pub(crate) fn load(bytes: &[u8]) -> Result<Saved, LoadError> {
     Ok(Saved {
         structure: structure.to_owned(),
         preset: preset.to_owned(),
+        overrides,
         tris,
         offsets,
         built,

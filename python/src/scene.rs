@@ -1,11 +1,12 @@
 //! `NativeScene`: the triangles of every mesh added, and the structure built over them on the
 //! first query.
 
+use crate::params::{self, Value};
 use crate::{queries, saved};
 use numpy::{PyArray1, PyReadonlyArray2, PyUntypedArrayMethods};
 use pyo3::exceptions::PyValueError;
 use pyo3::prelude::*;
-use pyo3::types::PyBytes;
+use pyo3::types::{PyBytes, PyDict};
 use rt_bvh::{Bvh, BvhParams};
 use rt_core::glam::Vec3;
 use rt_core::{Accel, BruteForce, Triangle};
@@ -157,6 +158,8 @@ pub(crate) struct NativeScene {
     params: Params,
     structure: String,
     preset: String,
+    /// The parameters given by keyword, by name, applied over the preset's.
+    overrides: Vec<(String, Value)>,
     pub tris: Vec<Triangle>,
     /// The index in `tris` of each geometry's first triangle.
     pub offsets: Vec<u32>,
@@ -166,43 +169,19 @@ pub(crate) struct NativeScene {
 #[pymethods]
 impl NativeScene {
     #[new]
-    #[pyo3(signature = (structure, preset=None))]
-    fn new(structure: &str, preset: Option<&str>) -> PyResult<Self> {
-        let (preset, params) = match structure {
-            "bvh" => with_params(
-                find_preset::<Bvh<Triangle>>(structure, preset)?,
-                Params::Bvh,
-            ),
-            "kdtree" => with_params(
-                find_preset::<KdTree<Triangle>>(structure, preset)?,
-                Params::KdTree,
-            ),
-            "grid" => with_params(
-                find_preset::<Grid<Triangle>>(structure, preset)?,
-                Params::Grid,
-            ),
-            "hgrid" => with_params(
-                find_preset::<HGrid<Triangle>>(structure, preset)?,
-                Params::HGrid,
-            ),
-            "octree" => with_params(
-                find_preset::<Octree<Triangle>>(structure, preset)?,
-                Params::Octree,
-            ),
-            "brute" => with_params(
-                find_preset::<BruteForce<Triangle>>(structure, preset)?,
-                |()| Params::Brute,
-            ),
-            _ => return Err(unknown_structure(structure)),
-        };
-        Ok(Self {
-            params,
-            structure: structure.to_owned(),
-            preset: preset.to_owned(),
-            tris: Vec::new(),
-            offsets: Vec::new(),
-            built: OnceLock::new(),
-        })
+    #[pyo3(signature = (structure, preset=None, params=None))]
+    fn new(
+        structure: &str,
+        preset: Option<&str>,
+        params: Option<&Bound<'_, PyDict>>,
+    ) -> PyResult<Self> {
+        let mut overrides = Vec::new();
+        for (key, value) in params.into_iter().flat_map(|d| d.iter()) {
+            let key: String = key.extract()?;
+            let value = Value::of(&key, &value)?;
+            overrides.push((key, value));
+        }
+        Self::create(structure, preset, overrides)
     }
 
     /// Adds a mesh: `vertices` `(n, 3)` float32, `triangles` `(m, 3)` uint32, both C-contiguous.
@@ -281,6 +260,7 @@ impl NativeScene {
             saved::save(
                 &self.structure,
                 &self.preset,
+                &self.overrides,
                 &self.tris,
                 &self.offsets,
                 &built.structure,
@@ -295,7 +275,8 @@ impl NativeScene {
         let saved = py
             .detach(|| saved::load(bytes))
             .map_err(|e| PyValueError::new_err(format!("not a valid saved scene: {e}")))?;
-        let mut scene = Self::new(&saved.structure, Some(&saved.preset))?;
+        let mut scene = Self::create(&saved.structure, Some(&saved.preset), saved.overrides)
+            .map_err(|e| PyValueError::new_err(format!("not a valid saved scene: {e}")))?;
         scene.tris = saved.tris;
         scene.offsets = saved.offsets;
         let built = Built {
@@ -306,9 +287,13 @@ impl NativeScene {
         Ok(scene)
     }
 
-    /// The structure's name and preset.
-    fn describe(&self) -> (String, String) {
-        (self.structure.clone(), self.preset.clone())
+    /// The structure's name, its preset, and the parameters given by keyword.
+    fn describe<'py>(&self, py: Python<'py>) -> PyResult<(String, String, Bound<'py, PyDict>)> {
+        let params = PyDict::new(py);
+        for (key, value) in &self.overrides {
+            params.set_item(key, value.to_object(py)?)?;
+        }
+        Ok((self.structure.clone(), self.preset.clone(), params))
     }
 
     /// Closest hits: `t`, geometry ids, primitive ids, `uv` (flat `(n, 2)`), unit normals
@@ -479,6 +464,66 @@ impl NativeScene {
 }
 
 impl NativeScene {
+    /// The scene of `structure` with `preset` (its default for `None`) and `overrides` set
+    /// over it, in name order, each checked.
+    pub(crate) fn create(
+        structure: &str,
+        preset: Option<&str>,
+        mut overrides: Vec<(String, Value)>,
+    ) -> PyResult<Self> {
+        let (preset, mut params) = match structure {
+            "bvh" => with_params(
+                find_preset::<Bvh<Triangle>>(structure, preset)?,
+                Params::Bvh,
+            ),
+            "kdtree" => with_params(
+                find_preset::<KdTree<Triangle>>(structure, preset)?,
+                Params::KdTree,
+            ),
+            "grid" => with_params(
+                find_preset::<Grid<Triangle>>(structure, preset)?,
+                Params::Grid,
+            ),
+            "hgrid" => with_params(
+                find_preset::<HGrid<Triangle>>(structure, preset)?,
+                Params::HGrid,
+            ),
+            "octree" => with_params(
+                find_preset::<Octree<Triangle>>(structure, preset)?,
+                Params::Octree,
+            ),
+            "brute" => with_params(
+                find_preset::<BruteForce<Triangle>>(structure, preset)?,
+                |()| Params::Brute,
+            ),
+            _ => return Err(unknown_structure(structure)),
+        };
+        overrides.sort_by(|a, b| a.0.cmp(&b.0));
+        for (key, value) in &overrides {
+            match &mut params {
+                Params::Bvh(p) => params::set_bvh(p, key, value)?,
+                Params::KdTree(p) => params::set_kdtree(p, key, value)?,
+                Params::Grid(p) => params::set_grid(p, key, value)?,
+                Params::HGrid(p) => params::set_hgrid(p, key, value)?,
+                Params::Octree(p) => params::set_octree(p, key, value)?,
+                Params::Brute => {
+                    return Err(PyValueError::new_err(format!(
+                        "unknown parameter {key:?}: brute force takes none"
+                    )));
+                }
+            }
+        }
+        Ok(Self {
+            params,
+            structure: structure.to_owned(),
+            preset: preset.to_owned(),
+            overrides,
+            tris: Vec::new(),
+            offsets: Vec::new(),
+            built: OnceLock::new(),
+        })
+    }
+
     /// Runs `query` on the built structure and the rows of `input` (in memory order), with the
     /// GIL released, on `nthreads` threads (every core for 0).
     fn run<'a, T: numpy::Element + Sync, R: Send>(

@@ -76,6 +76,18 @@ impl Value {
         }
     }
 
+    /// The value as Python prints it, for messages.
+    fn repr(&self) -> String {
+        match self {
+            Self::None => "None".into(),
+            Self::Bool(true) => "True".into(),
+            Self::Bool(false) => "False".into(),
+            Self::Int(i) => i.to_string(),
+            Self::Float(f) => format!("{f:?}"),
+            Self::Word(w) => format!("{w:?}"),
+        }
+    }
+
     /// The value as a Python object.
     pub(crate) fn to_object<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyAny>> {
         Ok(match self {
@@ -111,7 +123,8 @@ fn float(key: &str, v: &Value, lo: f64, hi: f64, lo_open: bool) -> Check<f32> {
         Value::Float(f) => f,
         _ => {
             return Err(Refused::Kind(format!(
-                "{key}: expected a number, not {v:?}"
+                "{key}: expected a number, not {}",
+                v.repr()
             )));
         }
     };
@@ -133,7 +146,8 @@ fn int(key: &str, v: &Value, lo: i64, hi: i64) -> Check<i64> {
             "{key} = {i} is outside [{lo}, {hi}]"
         ))),
         _ => Err(Refused::Kind(format!(
-            "{key}: expected an integer, not {v:?}"
+            "{key}: expected an integer, not {}",
+            v.repr()
         ))),
     }
 }
@@ -141,7 +155,10 @@ fn int(key: &str, v: &Value, lo: i64, hi: i64) -> Check<i64> {
 fn boolean(key: &str, v: &Value) -> Check<bool> {
     match *v {
         Value::Bool(b) => Ok(b),
-        _ => Err(Refused::Kind(format!("{key}: expected a bool, not {v:?}"))),
+        _ => Err(Refused::Kind(format!(
+            "{key}: expected a bool, not {}",
+            v.repr()
+        ))),
     }
 }
 
@@ -153,8 +170,9 @@ fn choice(key: &str, v: &Value, names: &[&str]) -> Check<usize> {
             .position(|n| n == w)
             .ok_or_else(|| Refused::Range(format!("{key} = {w:?}: one of {}", names.join(", ")))),
         _ => Err(Refused::Kind(format!(
-            "{key}: expected one of {}, not {v:?}",
-            names.join(", ")
+            "{key}: expected one of {}, not {}",
+            names.join(", "),
+            v.repr()
         ))),
     }
 }

@@ -65,7 +65,7 @@ pub fn compare_boxes<A: Accel>(
     reference: &BruteForce<A::Prim>,
     boxes: &[Aabb],
 ) -> Result<(), BoxMismatch> {
-    compare_boxes_probed(accel, reference, boxes, &Probe::default())
+    compare_boxes_probed(accel, reference, boxes, &Probe::default()).map(drop)
 }
 
 pub(crate) fn compare_boxes_probed<A: Accel>(
@@ -73,7 +73,8 @@ pub(crate) fn compare_boxes_probed<A: Accel>(
     reference: &BruteForce<A::Prim>,
     boxes: &[Aabb],
     probe: &Probe,
-) -> Result<(), BoxMismatch> {
+) -> Result<Vec<Vec<u32>>, BoxMismatch> {
+    let mut answers = Vec::with_capacity(boxes.len());
     for b in boxes {
         probe.set(Doing::Box(*b));
         let expected = reference.overlapping(b);
@@ -130,8 +131,9 @@ pub(crate) fn compare_boxes_probed<A: Accel>(
                 ),
             ));
         }
+        answers.push(got);
     }
-    Ok(())
+    Ok(answers)
 }
 
 /// Box queries probing `prims` as the kit runs them, drawn from the scene so a fixed scene needs

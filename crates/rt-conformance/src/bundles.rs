@@ -90,16 +90,21 @@ pub fn same_bits(a: Option<Hit>, b: Option<Hit>) -> bool {
 /// # Errors
 /// The first answer that differs, with its ray, the order and the slice length.
 pub fn compare_bundles<A: Accel>(accel: &A, rays: &[Ray], any: bool) -> Result<(), String> {
-    compare_bundles_probed(accel, rays, any, &Probe::default())
+    compare_bundles_probed(accel, rays, any, &Probe::default()).map(drop)
 }
+
+/// The single queries' answers to the rays as given: the closest hits, and the any hits (empty
+/// when the any hit is not checked).
+pub(crate) type Singles = (Vec<Option<Hit>>, Vec<bool>);
 
 pub(crate) fn compare_bundles_probed<A: Accel>(
     accel: &A,
     rays: &[Ray],
     any: bool,
     probe: &Probe,
-) -> Result<(), String> {
+) -> Result<Singles, String> {
     let name = A::NAME;
+    let mut as_given = None;
     for (order, rays) in bundle_orders(rays, 0x5eed_b0d1) {
         let single: Vec<Option<Hit>> = rays.iter().map(|r| accel.intersect(r)).collect();
         let blocked: Vec<bool> = if any {
@@ -107,6 +112,10 @@ pub(crate) fn compare_bundles_probed<A: Accel>(
         } else {
             Vec::new()
         };
+        if as_given.is_none() {
+            // The first order is the rays as given.
+            as_given = Some((single.clone(), blocked.clone()));
+        }
         for downwards in [false, true] {
             let slices = cycled_slices(rays.len(), downwards);
             let mut hits = vec![None; rays.len()];
@@ -153,7 +162,8 @@ pub(crate) fn compare_bundles_probed<A: Accel>(
         }
     }
     counted_and_uneven(accel, rays, any, probe)?;
-    ordered(accel, rays, any, probe)
+    ordered(accel, rays, any, probe)?;
+    Ok(as_given.unwrap_or_default())
 }
 
 /// The ordered bundle queries ([`Accel::intersect_bundle_ordered_with`]) answer each ray an

@@ -65,17 +65,27 @@ pub fn compare_inside<A: Accel>(
     prims: &[A::Prim],
     points: &[(Vec3, f32)],
 ) -> Result<(), InsideMismatch> {
-    compare_inside_probed(accel, reference, prims, points, &Probe::default())
+    let tree = WindingTree::build(prims).ok();
+    compare_inside_probed(
+        accel,
+        reference,
+        prims,
+        tree.as_ref(),
+        points,
+        &Probe::default(),
+    )
+    .map(drop)
 }
 
 pub(crate) fn compare_inside_probed<A: Accel>(
     accel: &A,
     reference: &BruteForce<A::Prim>,
     prims: &[A::Prim],
+    tree: Option<&WindingTree>,
     points: &[(Vec3, f32)],
     probe: &Probe,
-) -> Result<(), InsideMismatch> {
-    let tree = WindingTree::build(prims).ok();
+) -> Result<Vec<Option<SignedPoint>>, InsideMismatch> {
+    let mut answers = Vec::with_capacity(points.len());
     for &(point, max_distance) in points {
         probe.set(Doing::Inside(point, max_distance));
         let mismatch = |query, expected: String, got: String| InsideMismatch {
@@ -96,7 +106,10 @@ pub(crate) fn compare_inside_probed<A: Accel>(
                 got.to_string(),
             ));
         }
-        let Some(tree) = &tree else { continue };
+        let Some(tree) = tree else {
+            answers.push(None);
+            continue;
+        };
         let exact = winding_number_exact(prims, point).unwrap_or(f64::NAN);
         let fast = tree.winding_number(point, TOLERANCE);
         let kept =
@@ -147,8 +160,9 @@ pub(crate) fn compare_inside_probed<A: Accel>(
                 ));
             }
         }
+        answers.push(signed);
     }
-    Ok(())
+    Ok(answers)
 }
 
 /// The points of `points` the kit checks the sign of: at most [`INSIDE_POINTS`], spread evenly.

@@ -27,7 +27,10 @@
 //! ([`compare_inside`]); the answer must not change when statistics are counted;
 //! and the structure must report the number of valid primitives it kept. The bundle queries
 //! ([`Accel::intersect_bundle`], [`Accel::occluded_bundle`]) must give, ray for ray, the same
-//! bits as the single queries, whatever bundles the rays come in ([`compare_bundles`]).
+//! bits as the single queries, whatever bundles the rays come in ([`compare_bundles`]), and so
+//! must every batch query ([`rt_core::batch`], [`rt_sdf::batch`]), slot for slot, on threads
+//! other than the one that built the structure ([`compare_batches`]; on the fixed scenes, whose
+//! hundreds of rays fill several chunks of a batch).
 //!
 //! The number of proptest cases is proptest's default (256) unless `PROPTEST_CASES` is set.
 //!
@@ -55,6 +58,7 @@ use std::fmt;
 #[doc(hidden)]
 pub use rt_core;
 
+mod batches;
 mod boxes;
 mod bundles;
 mod hits;
@@ -62,6 +66,7 @@ mod inside;
 mod instances;
 mod refit;
 mod saved;
+pub use batches::compare_batches;
 pub use boxes::{BoxMismatch, compare_boxes, scene_boxes};
 pub use bundles::{
     BUNDLE_SIZES, bundle_orders, check_coherent_bundles, check_coherent_bundles_on,
@@ -275,7 +280,7 @@ pub fn compare_points<A: Accel>(
     reference: &BruteForce<A::Prim>,
     points: &[(Vec3, f32)],
 ) -> Result<(), PointMismatch> {
-    compare_points_probed(accel, reference, points, &Probe::default())
+    compare_points_probed(accel, reference, points, &Probe::default()).map(drop)
 }
 
 fn compare_points_probed<A: Accel>(
@@ -283,7 +288,8 @@ fn compare_points_probed<A: Accel>(
     reference: &BruteForce<A::Prim>,
     points: &[(Vec3, f32)],
     probe: &Probe,
-) -> Result<(), PointMismatch> {
+) -> Result<Vec<Option<PointHit>>, PointMismatch> {
+    let mut answers = Vec::with_capacity(points.len());
     for &(point, max_distance) in points {
         probe.set(Doing::Point(point, max_distance));
         let mismatch = |expected, got, detail: String| PointMismatch {
@@ -310,6 +316,7 @@ fn compare_points_probed<A: Accel>(
                     ),
                 ));
             }
+            answers.push(counted);
             continue;
         }
         let expected = reference.closest_point(point, max_distance);
@@ -324,8 +331,9 @@ fn compare_points_probed<A: Accel>(
                 "closest_point_with(Counters) answers differently from closest_point".into(),
             ));
         }
+        answers.push(got);
     }
-    Ok(())
+    Ok(answers)
 }
 
 /// Closest-point queries probing `prims` as the kit runs them, drawn from the scene itself so a
@@ -470,7 +478,7 @@ pub fn check_case_within<A: Accel + 'static>(
     rays: &[Ray],
     stall: std::time::Duration,
 ) -> Result<(), String> {
-    check_parts::<A>(params, prims, rays, stall, &Part::ALL, true)
+    check_parts::<A>(params, prims, rays, stall, &Part::ALL, true, true)
 }
 
 /// One part of what [`check_case`] checks. Grading reports the parts apart, so that a structure
@@ -482,7 +490,8 @@ pub enum Part {
     Closest,
     /// The any hit ([`Accel::occluded`]), invalid rays answered at once.
     Any,
-    /// The bundle queries give the single queries' bits ([`compare_bundles`]).
+    /// The bundle queries give the single queries' bits ([`compare_bundles`]), and so do the
+    /// ray batches. (Each other part checks its query's batch too: [`compare_batches`].)
     Bundles,
     /// Closest points ([`compare_points`]).
     ClosestPoints,
@@ -539,11 +548,12 @@ pub fn check_part<A: Accel + 'static>(
     part: Part,
     stall: std::time::Duration,
 ) -> Result<(), String> {
-    check_parts::<A>(params, prims, rays, stall, &[part], true)
+    check_parts::<A>(params, prims, rays, stall, &[part], true, true)
 }
 
 /// Checks `parts` of [`check_case_within`]; with `bundles_any` false, the bundle part checks the
-/// closest-hit bundles only.
+/// closest-hit bundles only; with `batches` false, no part checks its batches (random cases:
+/// a few rays and points each, which the fixed scenes' batches cover).
 fn check_parts<A: Accel + 'static>(
     params: &A::Params,
     prims: &[A::Prim],
@@ -551,6 +561,7 @@ fn check_parts<A: Accel + 'static>(
     stall: std::time::Duration,
     parts: &[Part],
     bundles_any: bool,
+    batches: bool,
 ) -> Result<(), String> {
     let (params, prims, rays) = (params.clone(), prims.to_vec(), rays.to_vec());
     let parts = parts.to_vec();
@@ -587,39 +598,74 @@ fn check_parts<A: Accel + 'static>(
             )
             .map_err(|m| failed(&m))?;
         }
-        if has(Part::Bundles) {
-            // The bundle queries must give the single queries' answers.
-            bundles::compare_bundles_probed(&accel, &rays, bundles_any, probe)
-                .map_err(|m| failed(&m))?;
-        }
         // The points of the closest-point part, which the inside part samples too.
         let points = if has(Part::ClosestPoints) || has(Part::Inside) {
             scene_points(&prims, &rays)
         } else {
             Vec::new()
         };
+        // The batches of each part, checked against the part's single answers at the end, on
+        // the kit's pool, all in one visit.
+        let mut later: Vec<batches::Check<'_>> = Vec::new();
+        let accel = &accel;
+        if has(Part::Bundles) {
+            // The bundle queries must give the single queries' answers.
+            let single = bundles::compare_bundles_probed(accel, &rays, bundles_any, probe)
+                .map_err(|m| failed(&m))?;
+            // And so must the batches, on other threads.
+            let rays = &rays;
+            later.push(Box::new(move || batches::rays(accel, rays, &single, probe)));
+        }
         if has(Part::ClosestPoints) {
-            compare_points_probed(&accel, &reference, &points, probe).map_err(|m| failed(&m))?;
+            let single =
+                compare_points_probed(accel, &reference, &points, probe).map_err(|m| failed(&m))?;
+            let points = &points;
+            later.push(Box::new(move || {
+                batches::points(accel, points, &single, probe)
+            }));
         }
         if has(Part::BoxOverlap) {
             let boxes = scene_boxes(&prims, prims.len() as u64);
-            boxes::compare_boxes_probed(&accel, &reference, &boxes, probe)
+            let single = boxes::compare_boxes_probed(accel, &reference, &boxes, probe)
                 .map_err(|m| failed(&m))?;
+            later.push(Box::new(move || {
+                batches::boxes(accel, &boxes, &single, probe)
+            }));
         }
         if has(Part::AllHits) {
             // Every ray of small cases, an even spread of at most `HITS_RAYS` of large ones: each
             // ray runs seven more walks here, most of them to the ray's end.
             let stride = rays.len().div_ceil(hits::HITS_RAYS).max(1);
             let some: Vec<Ray> = rays.iter().step_by(stride).copied().collect();
-            hits::compare_hits_probed(&accel, &prims, &some, probe).map_err(|m| failed(&m))?;
+            hits::compare_hits_probed(accel, &prims, &some, probe).map_err(|m| failed(&m))?;
+            let single = batches::single_hits(accel, &some);
+            later.push(Box::new(move || {
+                batches::hits(accel, &some, &single, probe)
+            }));
         }
         if has(Part::Inside) {
             // Parity counts crossings with `count_hits`, which the all-hits part checks.
             let near = inside::some_points(&points);
-            inside::compare_inside_probed(&accel, &reference, &prims, &near, probe)
-                .map_err(|m| failed(&m))?;
+            let tree = rt_sdf::WindingTree::build(&prims).ok();
+            let single = inside::compare_inside_probed(
+                accel,
+                &reference,
+                &prims,
+                tree.as_ref(),
+                &near,
+                probe,
+            )
+            .map_err(|m| failed(&m))?;
+            if let Some(tree) = tree {
+                later.push(Box::new(move || {
+                    batches::signed(accel, &tree, &near, &single, probe)
+                }));
+            }
         }
-        Ok(())
+        if !batches {
+            later.clear();
+        }
+        batches::on_pool(later).map_err(|m| failed(&m))
     })
 }
 
@@ -947,7 +993,15 @@ pub fn compare_slices<P: Primitive>(
 pub fn check_scene_closest<A: Accel<Prim = Triangle> + 'static>(params: &A::Params, name: &str) {
     let s = scene(name);
     let parts = [Part::Closest, Part::Bundles];
-    if let Err(e) = check_parts::<A>(params, &s.triangles, &s.rays, STALL_LIMIT, &parts, false) {
+    if let Err(e) = check_parts::<A>(
+        params,
+        &s.triangles,
+        &s.rays,
+        STALL_LIMIT,
+        &parts,
+        false,
+        true,
+    ) {
         panic!("conformance scene `{name}` (closest hit) failed: {e}");
     }
 }
@@ -1097,7 +1151,10 @@ pub fn rays_into_cube(seed: u64, n: usize) -> Vec<Ray> {
 /// # Panics
 /// With the shrunk failing case.
 pub fn check_random<A: Accel<Prim = Triangle> + 'static>(params: &A::Params) {
-    if let Err(e) = random_scenes(A::NAME, |tris, rays| check_case::<A>(params, tris, rays)) {
+    let check = |tris: &[Triangle], rays: &[Ray]| {
+        check_parts::<A>(params, tris, rays, STALL_LIMIT, &Part::ALL, true, false)
+    };
+    if let Err(e) = random_scenes(A::NAME, check) {
         panic!("{e}");
     }
 }
@@ -1113,7 +1170,7 @@ pub fn check_random_part<A: Accel<Prim = Triangle> + 'static>(
     stall: std::time::Duration,
 ) -> Result<(), String> {
     random_scenes(A::NAME, |tris, rays| {
-        check_part::<A>(params, tris, rays, part, stall)
+        check_parts::<A>(params, tris, rays, stall, &[part], true, false)
     })
 }
 

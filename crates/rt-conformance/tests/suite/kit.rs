@@ -1118,3 +1118,76 @@ fn parts_are_checked_apart() {
     // All parts together fail too.
     assert!(check_case_within::<NeverBlocked>(&(), &s.triangles, &s.rays, STALL_LIMIT).is_err());
 }
+
+/// Brute force that finds nothing off the thread that built it, as a structure keeping its
+/// primitives in a thread-local would: every single query the kit makes on its own thread is
+/// right, every batch (run on the kit's pool) wrong.
+struct ThreadBound(BruteForce<Triangle>, std::thread::ThreadId);
+
+impl ThreadBound {
+    fn here(&self) -> bool {
+        std::thread::current().id() == self.1
+    }
+}
+
+impl Accel for ThreadBound {
+    type Prim = Triangle;
+    type Params = ();
+    const NAME: &'static str = "thread-bound";
+    fn presets() -> Vec<(&'static str, ())> {
+        vec![("default", ())]
+    }
+    fn build(prims: &[Triangle], _: &()) -> Self {
+        Self(BruteForce::build(prims, &()), std::thread::current().id())
+    }
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        if self.here() {
+            self.0.ray_query(ray, query, stats);
+        }
+    }
+    fn bounds(&self) -> Aabb {
+        self.0.bounds()
+    }
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        if self.here() {
+            self.0.ball_query(query, stats);
+        }
+    }
+    fn box_query<Q: BoxQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        if self.here() {
+            self.0.box_query(query, stats);
+        }
+    }
+    fn memory_bytes(&self) -> usize {
+        self.0.memory_bytes()
+    }
+    fn build_stats(&self) -> BuildStats {
+        self.0.build_stats()
+    }
+}
+
+/// The batch checks can fail: a structure right on its own thread only fails each part that
+/// has a batch, naming the batch query, and `compare_batches` alone fails it too; brute force
+/// passes it.
+#[test]
+fn batches_answer_on_every_thread() {
+    let s = scene("one_triangle");
+    let part = |p| check_part::<ThreadBound>(&(), &s.triangles, &s.rays, p, STALL_LIMIT);
+    assert!(part(Part::Closest).is_ok(), "{:?}", part(Part::Closest));
+    assert!(part(Part::Any).is_ok(), "{:?}", part(Part::Any));
+    for (p, query) in [
+        (Part::Bundles, "batch::intersect of"),
+        (Part::ClosestPoints, "batch::closest_points of"),
+        (Part::BoxOverlap, "batch::overlapping of"),
+        (Part::AllHits, "batch::count_hits of"),
+        (Part::Inside, "rt_sdf::batch::signed_distances of"),
+    ] {
+        let e = part(p).expect_err(query);
+        assert!(e.contains(query) && e.contains("on two threads"), "{e}");
+    }
+    let accel = ThreadBound::build(&s.triangles, &());
+    let e = rt_conformance::compare_batches(&accel, &s.triangles, &s.rays).unwrap_err();
+    assert!(e.contains("batch::intersect of"), "{e}");
+    let brute = BruteForce::build(&s.triangles, &());
+    rt_conformance::compare_batches(&brute, &s.triangles, &s.rays).unwrap();
+}

@@ -8,7 +8,7 @@ use glam::{Vec3, Vec4};
 /// Tests every primitive for every ray and keeps the closest: the definition of the right answer.
 ///
 /// The cost is one primitive test per valid primitive per ray; there is nothing to tune. A ray
-/// first meets four primitives' boxes at a time, grown well past rounding (see [`Culls`]), and
+/// first meets four primitives' boxes at a time, grown well past rounding, and
 /// only the primitives whose boxes it meets are tested; the others cannot be hit, are counted
 /// as tested, and are skipped. Every primitive is still considered for every ray, in index
 /// order, so the answers are those of testing each one.
@@ -147,7 +147,7 @@ impl<P: Primitive> Accel for BruteForce<P> {
         Self::from_parts(prims, ids)
     }
 
-    /// Tests every valid primitive whose grown box the ray meets ([`Culls`]), in index order,
+    /// Tests every valid primitive whose grown box the ray meets, in index order,
     /// until the query stops; counts the others as tested.
     fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
         // Outside the precondition (NaN, huge origins, ...): no answer is meaningful.

@@ -223,8 +223,54 @@ const TRIPLES: [(usize, usize, usize); 10] = [
     (0, 1, 2),
 ];
 
-impl Cluster {
-    /// The cluster of `tris`, moments about their area-weighted centroid.
+/// The slot in [`TRIPLES`] (and [`Cluster::cubic`]) of each index triple `(i, j, k)`, in
+/// any order.
+const CUBIC_SLOT: [[[usize; 3]; 3]; 3] = {
+    let mut slot = [[[0; 3]; 3]; 3];
+    let mut e = 0;
+    while e < TRIPLES.len() {
+        let (x, y, z) = TRIPLES[e];
+        // Every order of the triple.
+        let orders = [
+            [x, y, z],
+            [x, z, y],
+            [y, x, z],
+            [y, z, x],
+            [z, x, y],
+            [z, y, x],
+        ];
+        let mut o = 0;
+        while o < orders.len() {
+            let [i, j, k] = orders[o];
+            slot[i][j][k] = e;
+            o += 1;
+        }
+        e += 1;
+    }
+    slot
+};
+
+/// The moments of a set of triangles about their area-weighted centroid, as the build carries
+/// them up the tree: a parent's are its children's shifted to its own centre and summed, so
+/// that each triangle's moments are computed once (in its leaf) rather than once per level.
+#[derive(Clone, Copy, Debug)]
+struct Moments {
+    /// The triangles' total area.
+    area: f64,
+    /// Their centroids weighted by area, summed (the centre times the area).
+    weighted: DVec3,
+    /// Where the moments below are taken: `weighted / area`, or a vertex where the area is 0.
+    center: DVec3,
+    /// `∫ n dA`.
+    n: DVec3,
+    /// `M_ij = ∫ n_i d_j dA`, with `d = x − center`.
+    m: [[f64; 3]; 3],
+    /// `T_ijk = ∫ n_i d_j d_k dA`.
+    t3: [[[f64; 3]; 3]; 3],
+}
+
+impl Moments {
+    /// The moments of `tris` (at least one), summed triangle by triangle.
     fn of(tris: &[[Vec3; 3]]) -> Self {
         let tri = |t: &[Vec3; 3]| [t[0].as_dvec3(), t[1].as_dvec3(), t[2].as_dvec3()];
         let (mut area, mut weighted) = (0.0, DVec3::ZERO);
@@ -240,10 +286,8 @@ impl Cluster {
             tri(&tris[0])[0]
         };
         let (mut n, mut m, mut t3) = (DVec3::ZERO, [[0.0f64; 3]; 3], [[[0.0f64; 3]; 3]; 3]);
-        let mut radius = 0.0f64;
         for t in tris {
             let [a, b, c] = tri(t).map(|v| v - center);
-            radius = radius.max(a.length()).max(b.length()).max(c.length());
             // With the area-weighted normal `an` (the triangle's normal is constant), the
             // moments about the centre are ∫ n dA = an, ∫ n dᵀ dA = an (s/3)ᵀ and
             // ∫ n_i d dᵀ dA = an_i/12 · (a aᵀ + b bᵀ + c cᵀ + s sᵀ), with s = a + b + c
@@ -261,6 +305,81 @@ impl Cluster {
                 }
             }
         }
+        Self {
+            area,
+            weighted,
+            center,
+            n,
+            m,
+            t3,
+        }
+    }
+
+    /// The moments of both sets together, about their joint centroid (`fallback` where their
+    /// area is 0). Moving the centre by `δ` (so that `d' = d + δ`) gives
+    /// `M'_ij = M_ij + N_i δ_j` and `T'_ijk = T_ijk + M_ij δ_k + M_ik δ_j + N_i δ_j δ_k`: no
+    /// large terms that cancel, as moments about a far origin would have.
+    fn merge(&self, other: &Self, fallback: DVec3) -> Self {
+        let area = self.area + other.area;
+        let weighted = self.weighted + other.weighted;
+        let center = if area > 0.0 {
+            weighted / area
+        } else {
+            fallback
+        };
+        let mut sum = Self {
+            area,
+            weighted,
+            center,
+            n: self.n + other.n,
+            m: [[0.0; 3]; 3],
+            t3: [[[0.0; 3]; 3]; 3],
+        };
+        for part in [self, other] {
+            let d = part.center - center;
+            for i in 0..3 {
+                for j in 0..3 {
+                    sum.m[i][j] += part.m[i][j] + part.n[i] * d[j];
+                    for k in 0..3 {
+                        sum.t3[i][j][k] += part.t3[i][j][k]
+                            + part.m[i][j] * d[k]
+                            + part.m[i][k] * d[j]
+                            + part.n[i] * d[j] * d[k];
+                    }
+                }
+            }
+        }
+        sum
+    }
+}
+
+impl Cluster {
+    /// The cluster of `tris`, moments about their area-weighted centroid.
+    #[cfg(test)]
+    fn of(tris: &[[Vec3; 3]]) -> Self {
+        Self::with_moments(&Moments::of(tris), tris)
+    }
+
+    /// The cluster of `tris` whose moments are `moments`: its expansion's coefficients, and
+    /// the radius about the moments' centre that holds every vertex.
+    fn with_moments(moments: &Moments, tris: &[[Vec3; 3]]) -> Self {
+        let Moments {
+            area,
+            center,
+            n,
+            m,
+            t3,
+            ..
+        } = *moments;
+        // The largest squared distance, then its root: the root is monotonic and correctly
+        // rounded, so this is the largest of the distances, with one root instead of three a
+        // triangle.
+        let farthest = tris
+            .iter()
+            .flatten()
+            .map(|v| (v.as_dvec3() - center).length_squared())
+            .fold(0.0f64, f64::max);
+        let radius = farthest.sqrt();
         let four_pi = 4.0 * PI;
         let mut cl = Cluster {
             center: center.to_array(),
@@ -280,13 +399,7 @@ impl Cluster {
         for (i, plane) in t3.iter().enumerate() {
             for (j, row) in plane.iter().enumerate() {
                 for (k, &value) in row.iter().enumerate() {
-                    let mut key = [i, j, k];
-                    key.sort_unstable();
-                    let e = TRIPLES
-                        .iter()
-                        .position(|&(x, y, z)| [x, y, z] == key)
-                        .unwrap_or(0);
-                    cl.cubic[e] += 7.5 * value / four_pi;
+                    cl.cubic[CUBIC_SLOT[i][j][k]] += 7.5 * value / four_pi;
                 }
             }
         }
@@ -331,7 +444,9 @@ impl Cluster {
 /// expansion needs each cluster's moments over triangles it holds once, and the kd-tree, the
 /// grids and the octree list a triangle in every cell it crosses. Building it sorts the
 /// triangles by median splits, `O(n log n)`; it keeps a copy of them and 232 bytes per
-/// cluster of at most 8. It also finds the edges the triangles leave unmatched and keeps the
+/// cluster of at most 8. Each triangle's moments are summed once, in its leaf, and each parent
+/// takes its children's, moved to its own centre; with the `parallel` feature (default) the
+/// halves of large clusters build on rayon's threads, into the same tree bit for bit. It also finds the edges the triangles leave unmatched and keeps the
 /// caps that close them, in a tree of their own, for [counting crossings](crate::crossing)
 /// in [`is_inside`](Self::is_inside).
 #[derive(Clone, Debug)]
@@ -391,9 +506,10 @@ impl WindingTree {
 
     /// The tree over `tris` as they are, without caps.
     fn of(mut tris: Vec<[Vec3; 3]>) -> Self {
-        let mut nodes = Vec::with_capacity(2 * tris.len().div_ceil(LEAF));
+        let mut nodes = Vec::new();
         if !tris.is_empty() {
-            build_node(&mut nodes, &mut tris, 0);
+            nodes = vec![Cluster::zeroed(); cluster_count(tris.len())];
+            build_node(&mut nodes, 0, &mut tris, 0);
         }
         let area = nodes.first().map_or(0.0, |c| c.area);
         let bounds = tris.iter().flatten().fold(
@@ -551,31 +667,82 @@ impl WindingTree {
     }
 }
 
-/// Appends the cluster of `tris` (starting at `first` in the tree's order) and, if it holds
-/// more than [`LEAF`] triangles, its two halves split at the median of the triangles'
-/// centroids along the axis where they spread most. Returns the cluster's index.
-fn build_node(nodes: &mut Vec<Cluster>, tris: &mut [[Vec3; 3]], first: usize) -> usize {
-    let index = nodes.len();
-    let mut cluster = Cluster::of(tris);
-    cluster.first = first as u32;
-    cluster.count = tris.len() as u32;
-    nodes.push(cluster);
-    if tris.len() > LEAF {
-        let centroid = |t: &[Vec3; 3]| t[0] + t[1] + t[2];
-        let (lo, hi) = tris.iter().fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), t| (lo.min(centroid(t)), hi.max(centroid(t))),
-        );
-        let axis = (hi - lo).max_position();
-        let mid = tris.len() / 2;
-        tris.select_nth_unstable_by(mid, |a, b| centroid(a)[axis].total_cmp(&centroid(b)[axis]));
-        let (left, right) = tris.split_at_mut(mid);
-        build_node(nodes, left, first);
-        let second = build_node(nodes, right, first + mid);
-        nodes[index].first = second as u32;
-        nodes[index].count = 0;
+/// Subtrees of at least this many triangles build their halves on two threads at once.
+const PARALLEL_MIN: usize = 4096;
+
+/// How many clusters the tree of `n ≥ 1` triangles has. Median splits make it a function of
+/// `n` alone, so each subtree's slots in the tree's depth-first list are known before it is
+/// built, and the halves can fill theirs at the same time.
+fn cluster_count(n: usize) -> usize {
+    // The counts of `m` and `m + 1` triangles from those of `h = ⌊m/2⌋` and `h + 1`: the
+    // halves of `m` and of `m + 1` are each `h` or `h + 1` triangles.
+    fn pair(m: usize) -> (usize, usize) {
+        if m < LEAF {
+            return (1, 1);
+        }
+        let (a, b) = pair(m / 2);
+        if m.is_multiple_of(2) {
+            (if m <= LEAF { 1 } else { 1 + 2 * a }, 1 + a + b)
+        } else {
+            (if m <= LEAF { 1 } else { 1 + a + b }, 1 + 2 * b)
+        }
     }
-    index
+    pair(n).0
+}
+
+/// Fills `nodes` (exactly [`cluster_count`] of `tris.len()` slots, the first at `index` in the
+/// tree's list) with the cluster of `tris` (starting at `first` in the tree's order) and, if it
+/// holds more than [`LEAF`] triangles, its two halves split at the median of the triangles'
+/// centroids along the axis where they spread most, the first half's subtree next, then the
+/// second's. Returns the moments of `tris`.
+fn build_node(
+    nodes: &mut [Cluster],
+    index: usize,
+    tris: &mut [[Vec3; 3]],
+    first: usize,
+) -> Moments {
+    let (node, below) = nodes
+        .split_first_mut()
+        .expect("a slot for every cluster of the subtree");
+    if tris.len() <= LEAF {
+        let moments = Moments::of(tris);
+        *node = Cluster {
+            first: first as u32,
+            count: tris.len() as u32,
+            ..Cluster::with_moments(&moments, tris)
+        };
+        return moments;
+    }
+    let centroid = |t: &[Vec3; 3]| t[0] + t[1] + t[2];
+    let (lo, hi) = tris.iter().fold(
+        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+        |(lo, hi), t| (lo.min(centroid(t)), hi.max(centroid(t))),
+    );
+    let axis = (hi - lo).max_position();
+    let mid = tris.len() / 2;
+    tris.select_nth_unstable_by(mid, |a, b| centroid(a)[axis].total_cmp(&centroid(b)[axis]));
+    let parallel = tris.len() >= PARALLEL_MIN;
+    let (left, right) = tris.split_at_mut(mid);
+    let (left_nodes, right_nodes) = below.split_at_mut(cluster_count(mid));
+    let second = index + 1 + left_nodes.len();
+    let (l, r) = if parallel {
+        rt_core::par::join(
+            || build_node(left_nodes, index + 1, left, first),
+            || build_node(right_nodes, second, right, first + mid),
+        )
+    } else {
+        (
+            build_node(left_nodes, index + 1, left, first),
+            build_node(right_nodes, second, right, first + mid),
+        )
+    };
+    let moments = l.merge(&r, tris[0][0].as_dvec3());
+    *node = Cluster {
+        first: second as u32,
+        count: 0,
+        ..Cluster::with_moments(&moments, tris)
+    };
+    moments
 }
 
 #[cfg(test)]
@@ -714,5 +881,94 @@ mod tests {
             NotATriangle { prim: 0 }
         );
         assert!(winding_number_exact(&spheres, Vec3::ZERO).is_err());
+    }
+
+    /// The slots the build gives each subtree are exactly the clusters it makes: the count
+    /// of the recursion it stands for, for every size up to a few thousand.
+    #[test]
+    fn the_cluster_count_is_the_recursion_it_stands_for() {
+        fn counted(n: usize) -> usize {
+            if n <= LEAF {
+                1
+            } else {
+                1 + counted(n / 2) + counted(n - n / 2)
+            }
+        }
+        for n in 1..3000 {
+            assert_eq!(cluster_count(n), counted(n), "{n} triangles");
+        }
+    }
+
+    /// Every cluster of a tree, whose moments the build merged from its children's, has the
+    /// coefficients and radius of the cluster computed directly from its triangles, up to
+    /// rounding: a shift with a wrong sign or a missing term is off by the size of the terms
+    /// themselves. The soup lies far from the origin and spreads unevenly, so that the shifts
+    /// are large, and the tree is big enough to build some halves on two threads.
+    #[test]
+    fn merged_moments_are_the_moments_of_the_triangles() {
+        let mut rng = Rng::new(11);
+        let far = Vec3::new(1000.0, -500.0, 250.0);
+        let tris: Vec<Triangle> = random_soup(&mut rng, 2 * PARALLEL_MIN + 37, 10.0)
+            .into_iter()
+            .map(|t| {
+                Triangle::new(
+                    t.v0 * t.v0.x + far,
+                    t.v1 * t.v0.x + far,
+                    t.v2 * t.v0.x + far,
+                )
+            })
+            .collect();
+        let tree = WindingTree::build(&tris).unwrap();
+        assert_eq!(tree.nodes.len(), cluster_count(tris.len()));
+        // Each cluster's triangles, by a walk over the tree's list.
+        fn spans(
+            tree: &WindingTree,
+            i: usize,
+            out: &mut Vec<(usize, usize, usize)>,
+        ) -> (usize, usize) {
+            let c = &tree.nodes[i];
+            let span = if c.count > 0 {
+                (c.first as usize, c.first as usize + c.count as usize)
+            } else {
+                let (lo, _) = spans(tree, i + 1, out);
+                let (_, hi) = spans(tree, c.first as usize, out);
+                (lo, hi)
+            };
+            out.push((i, span.0, span.1));
+            span
+        }
+        let mut all = Vec::new();
+        assert_eq!(spans(&tree, 0, &mut all), (0, tris.len()));
+        assert_eq!(all.len(), tree.nodes.len(), "every cluster is reached once");
+        let close = |a: f64, b: f64, scale: f64| (a - b).abs() <= 1e-9 * scale;
+        let mut interior = 0;
+        for (i, lo, hi) in all {
+            let (built, direct) = (&tree.nodes[i], Cluster::of(&tree.tris[lo..hi]));
+            interior += usize::from(built.count == 0);
+            let r = direct.radius;
+            // Each coefficient scaled by its order's size: area × radius to the power.
+            let a = direct.area;
+            assert!(close(built.area, a, a), "cluster {i}: area");
+            assert!(close(built.radius, r, r), "cluster {i}: radius");
+            for k in 0..3 {
+                assert!(
+                    close(built.center[k], direct.center[k], r),
+                    "cluster {i}: centre"
+                );
+                assert!(close(built.n[k], direct.n[k], a), "cluster {i}: n");
+                assert!(close(built.v[k], direct.v[k], a * r * r), "cluster {i}: v");
+            }
+            assert!(
+                close(built.trace, direct.trace, a * r),
+                "cluster {i}: trace"
+            );
+            for (b, d) in built.quadratic.iter().zip(&direct.quadratic) {
+                assert!(close(*b, *d, a * r), "cluster {i}: quadratic {b} {d}");
+            }
+            for (b, d) in built.cubic.iter().zip(&direct.cubic) {
+                assert!(close(*b, *d, a * r * r), "cluster {i}: cubic {b} {d}");
+            }
+        }
+        assert!(interior > 1000, "{interior} interior clusters");
     }
 }

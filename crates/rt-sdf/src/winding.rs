@@ -582,16 +582,21 @@ impl WindingTree {
     /// The tree's own evaluation of the winding number around `q`, within `tolerance` (above
     /// 0) of the exact sum.
     fn evaluate(&self, q: DVec3, tolerance: f64) -> Winding {
-        // PERF: first each cluster may take up to a fixed share of the tolerance, which lets
-        // the small clusters near the point be taken much closer than an even share by area
-        // would; the bounds actually taken usually sum to far below the tolerance. Only when
-        // they do not is the walk redone with shares by area, whose sum cannot exceed it.
-        let share = tolerance / SHARES;
-        let first = self.walk(q, |bound, _| bound <= share);
+        // PERF: first each cluster may take the larger of a fixed share of the tolerance and
+        // its share by area. The fixed share lets the small clusters near the point be taken
+        // much closer than an even share by area would; the share by area lets a large
+        // cluster (the caps of a hole, which are a few large triangles over many small ones)
+        // be taken from as near as its area allows. The bounds actually taken usually sum to
+        // far below the tolerance. Only when they do not is the walk redone with shares by
+        // area alone, whose sum cannot exceed it. Inside tests of 200,000 points in the box
+        // grown by a quarter, one thread, AMD Zen 3, fixed share -> the larger of both, µs a
+        // point, two alternating runs: the bunny 1.6 1.4 -> 1.0 0.9, the beetle 10.2 11.8 ->
+        // 10.2 10.5, homer 0.5 0.6 -> 0.6 0.6 (a scratch harness; the same answers).
+        let (share, per_area) = (tolerance / SHARES, tolerance / self.area);
+        let first = self.walk(q, |bound, area| bound <= share.max(per_area * area));
         if first.error_bound <= tolerance {
             return first;
         }
-        let per_area = tolerance / self.area;
         self.walk(q, |bound, area| bound <= per_area * area)
     }
 

@@ -245,7 +245,8 @@ pub(crate) fn caps(tris: &[[Vec3; 3]]) -> Vec<[Vec3; 3]> {
 // scratch harness timing `is_inside`, fans then halves in three alternating runs, µs a point:
 // the beetle (11 holes, of up to 512 edges) 20.1 19.1 18.8 -> 9.6 9.3 11.4; the bunny (5 holes,
 // of up to 80 edges) 1.0 1.0 1.0 -> 1.7 1.2 1.7, where a fan from each hole's mean was no faster
-// for the pieces of up to 16 vertices (1.3 1.3 1.2).
+// for the pieces of up to 16 vertices (1.3 1.3 1.2). The share by area in the tree's first
+// walk (`WindingTree::evaluate`) then brought the bunny back to 0.9-1.0.
 fn close_walk(walk: &[u32], points: &[Vec3], caps: &mut Vec<[Vec3; 3]>) {
     match *walk {
         [] | [_] | [_, _] => {} // a walk of two edges there and back needs nothing

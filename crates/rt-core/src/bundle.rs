@@ -1,5 +1,5 @@
 //! Many rays in one call: what [`Accel::intersect_bundle`] and [`Accel::occluded_bundle`]
-//! promise, the loops behind their defaults, and whole frames on all threads.
+//! promise, the loops behind their defaults, and frames in image order on all threads.
 //!
 //! A bundle query answers a slice of rays into a slice of answers. Its default loops over the
 //! single-ray queries ([`intersect_each`], [`occluded_each`]), so every structure (a student's
@@ -8,8 +8,8 @@
 //! and must answer every ray exactly as its single-ray query does: the conformance kit checks
 //! it.
 //!
-//! [`intersect_frame`] and [`occluded_frame`] trace a whole ray list in tasks on rayon's
-//! threads (with the `parallel` feature; in order on the calling thread without it).
+//! A whole ray list goes through the bundles on all threads with the batch queries
+//! ([`batch::intersect`], [`batch::occluded`]).
 //! [`intersect_image`] and [`occluded_image`] do the same for rays that come in image order,
 //! a row of pixels after another: they have the structure bundle them tile by tile
 //! ([`Accel::intersect_bundle_ordered_with`]), where a run of the list would be a strip of one
@@ -28,39 +28,9 @@
 //! [`Stats::single_ray`]: crate::Stats::single_ray
 
 pub use crate::accel::{intersect_each, occluded_each};
+#[cfg(doc)]
+use crate::batch;
 use crate::{Accel, Hit, NoStats, Ray};
-
-/// Rays per task of [`intersect_frame`] and [`occluded_frame`]: sixteen full bundles of 64
-/// rays, enough to amortise a task's start, few enough to balance a frame over the threads.
-pub const FRAME_TASK: usize = 1024;
-
-/// [`Accel::intersect_bundle`] over a whole ray list (a frame, a batch of queries), in tasks of
-/// [`FRAME_TASK`] rays on rayon's threads with the `parallel` feature. `out` gets as many answers
-/// as both slices have slots, each exactly the single-ray answer.
-///
-/// ```
-/// use rt_core::{Accel, BruteForce, Ray, Triangle, bundle, glam::Vec3};
-/// let tris = [Triangle::new(Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::Y)];
-/// let accel = BruteForce::build(&tris, &());
-/// let rays: Vec<Ray> = (0..1000)
-///     .map(|i| Ray::new(Vec3::new(i as f32 / 1000.0 - 0.5, 0.0, -1.0), Vec3::Z))
-///     .collect();
-/// let mut hits = vec![None; rays.len()];
-/// bundle::intersect_frame(&accel, &rays, &mut hits);
-/// assert!(hits.iter().all(|h| h.is_some_and(|h| h.prim == 0 && h.t == 1.0)));
-/// ```
-pub fn intersect_frame<A: Accel>(accel: &A, rays: &[Ray], out: &mut [Option<Hit>]) {
-    crate::par::zip_chunks_mut(rays, out, FRAME_TASK, |r, o| {
-        accel.intersect_bundle_with(r, o, &mut NoStats)
-    });
-}
-
-/// [`Accel::occluded_bundle`] over a whole ray list, as [`intersect_frame`] does.
-pub fn occluded_frame<A: Accel>(accel: &A, rays: &[Ray], out: &mut [bool]) {
-    crate::par::zip_chunks_mut(rays, out, FRAME_TASK, |r, o| {
-        accel.occluded_bundle_with(r, o, &mut NoStats)
-    });
-}
 
 /// The side of the square tiles [`intersect_image`] bundles rays by, in pixels: an 8×8 tile is
 /// the 64 rays of one full bundle.
@@ -87,7 +57,7 @@ impl<'a> Image<'a> {
     /// Rays of some pixels of an image `width` pixels wide: ray `i` belongs to pixel
     /// `pixels[i]` (`y · width + x`). In image order the indices never decrease along the list,
     /// as for the shadow rays of a frame's hits spawned in image order (any number of rays per
-    /// pixel). Rays listed in another order are traced as they come, as [`intersect_frame`]
+    /// pixel). Rays listed in another order are traced as they come, as [`batch::intersect`]
     /// traces them; rays past the end of `pixels` are not traced.
     pub fn pixels(width: u32, pixels: &'a [u32]) -> Self {
         Self {
@@ -97,7 +67,7 @@ impl<'a> Image<'a> {
     }
 }
 
-/// [`intersect_frame`] for rays in image order ([`Image`]): the same answers, in the same
+/// [`batch::intersect`] for rays in image order ([`Image`]): the same answers, in the same
 /// slots, but each band of [`IMAGE_TILE`] pixel rows is bundled tile by tile
 /// ([`Accel::intersect_bundle_ordered_with`]). A run of 64 rays of the list is a strip of 64
 /// pixels of one row; a tile's rays lie eight times closer together, so a bundle's lanes share
@@ -137,7 +107,7 @@ pub fn intersect_image<A: Accel>(
     );
 }
 
-/// [`occluded_frame`] for rays in image order, bundled as [`intersect_image`] bundles them.
+/// [`batch::occluded`] for rays in image order, bundled as [`intersect_image`] bundles them.
 pub fn occluded_image<A: Accel>(accel: &A, rays: &[Ray], image: Image<'_>, out: &mut [bool]) {
     by_tiles(
         rays,
@@ -183,7 +153,7 @@ fn by_tiles<T: Send>(
     let (rays, out) = (&rays[..n], &mut out[..n]);
     let pixels = image.pixels.map(|p| &p[..n]);
     if pixels.is_some_and(|p| !p.is_sorted()) {
-        crate::par::zip_chunks_mut(rays, out, FRAME_TASK, &unordered);
+        crate::par::zip_chunks_mut(rays, out, crate::batch::CHUNK, &unordered);
         return;
     }
     let width = u64::from(image.width.max(1));

@@ -53,7 +53,7 @@
 //! [`Accel::intersect_bundle`] and [`Accel::occluded_bundle`] answer a slice of rays, each
 //! exactly as the single-ray query would; structures that trace coherent rays together (a
 //! camera's tiles, a light's shadow rays) override them with rt-simd's bundles.
-//! [`bundle::intersect_frame`] traces a whole frame that way on all threads, and
+//! [`batch::intersect`] traces a whole ray list that way on all threads, and
 //! [`bundle::intersect_image`] a frame whose rays come in image order, bundled by tiles. See the
 //! [`bundle`] module.
 //!
@@ -88,7 +88,7 @@
 //!
 //! # Features
 //! - `parallel` (off here; the structure crates turn it on by default): the builders' parallel
-//!   patterns ([`par`]), [`bundle::intersect_frame`] and the [`batch`] queries run on rayon's
+//!   patterns ([`par`]), the [`batch`] queries and [`bundle::intersect_image`] run on rayon's
 //!   threads. Without it they
 //!   run in order on the calling thread and give the same answers.
 //!

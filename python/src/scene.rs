@@ -149,6 +149,9 @@ pub(crate) struct Built {
     pub structure: Structure,
     /// Built on the first query that needs a sign.
     pub winding: OnceLock<WindingTree>,
+    /// The triangles' unit normals, then a zero normal for a miss: made on the first
+    /// `cast_rays` ([`queries::normals`]).
+    pub normals: OnceLock<Vec<[f32; 3]>>,
 }
 
 /// The scene: every mesh added, concatenated, and the structure over them.
@@ -282,6 +285,7 @@ impl NativeScene {
         let built = Built {
             structure: saved.built,
             winding: OnceLock::new(),
+            normals: OnceLock::new(),
         };
         scene.built = OnceLock::from(built);
         Ok(scene)
@@ -561,6 +565,7 @@ impl NativeScene {
         Built {
             structure,
             winding: OnceLock::new(),
+            normals: OnceLock::new(),
         }
     }
 

@@ -124,14 +124,16 @@ fn time_interleaved(fs: &[BuildFn<'_>], passes: usize) -> Vec<f64> {
     times.into_iter().map(median).collect()
 }
 
-/// The ray sets each scene is traced with: primary and shadow rays from the view the scene
-/// fills (`compare`'s default, `--view filled`), incoherent rays (no camera), and primary and
-/// shadow rays from the sparse view (`--view sparse`), where most rays of a compact mesh miss
-/// its box and leave after one test. The ratio tables judge rt-bvh on the first three.
-const SETS: [(&str, RayKind, View); 5] = [
+/// The ray sets each scene is traced with: primary rays, their hits' shadow rays and diffuse
+/// bounces from the view the scene fills (`compare`'s default, `--view filled`), incoherent
+/// rays (no camera), and primary and shadow rays from the sparse view (`--view sparse`), where
+/// most rays of a compact mesh miss its box and leave after one test. The ratio tables judge
+/// rt-bvh on the first four.
+const SETS: [(&str, RayKind, View); 6] = [
     ("primary", RayKind::Primary, View::Filled),
     ("incoherent", RayKind::Incoherent, View::Filled),
     ("shadow", RayKind::Shadow, View::Filled),
+    ("diffuse", RayKind::Diffuse, View::Filled),
     ("sparse primary", RayKind::Primary, View::Sparse),
     ("sparse shadow", RayKind::Shadow, View::Sparse),
 ];

@@ -237,10 +237,11 @@ fn measure_all(args: &Args, out: &Path) -> Result<PathBuf, String> {
     speed_table(&mut page, &runs);
 
     page += "\n## Other rays\n\nIncoherent rays (random origins in the scene box, random \
-             directions: like diffuse bounces) and shadow rays (from each primary hit to a point \
-             light, any-hit queries), as many as the image has pixels.\n";
+             directions, as many as the image has pixels), diffuse bounces (from each primary \
+             hit, a cosine-weighted direction about the surface normal) and shadow rays (from \
+             each primary hit to a point light, any-hit queries).\n";
     for scene in &plan.other_rays {
-        for kind in ["incoherent", "shadow"] {
+        for kind in ["incoherent", "diffuse", "shadow"] {
             let mut argv = vec!["compare", "--scene", scene, "--rays", kind, "-s", plan.rows];
             argv.extend(&image);
             argv.push("--json");

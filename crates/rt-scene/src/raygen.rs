@@ -1,10 +1,10 @@
 //! The ray sets this project measures structures with: primary rays (a [`Camera`]'s image),
-//! incoherent and shadow rays, points for closest-point queries, and the rays-file format that
+//! incoherent rays, shadow rays and diffuse bounces from the primary hits, points for closest-point queries, and the rays-file format that
 //! replays any of them.
 
 use crate::Camera;
 use glam::Vec3;
-use rt_core::{Aabb, Hit, Primitive, Ray, Rng};
+use rt_core::{Aabb, Hit, Primitive, Ray, Rng, SurfacePoint};
 use std::fmt;
 use std::path::Path;
 
@@ -69,19 +69,74 @@ pub fn shadow_rays<P: Primitive>(
     prims: &[P],
     light: Vec3,
 ) -> Vec<Ray> {
+    from_hits(primary, hits, prims, |_, surface| {
+        surface.spawn_ray_to(light)
+    })
+}
+
+/// `spawn(primary ray, its hit's surface point)` for each primary ray that hits, the valid rays
+/// it makes in order.
+fn from_hits<P: Primitive>(
+    primary: &[Ray],
+    hits: &[Option<Hit>],
+    prims: &[P],
+    mut spawn: impl FnMut(&Ray, SurfacePoint) -> Ray,
+) -> Vec<Ray> {
     primary
         .iter()
         .zip(hits)
         .filter_map(|(r, h)| {
             let h = (*h)?;
-            let surface = prims.get(h.prim as usize)?.surface(r, h.t, h.u, h.v);
-            Some(surface.spawn_ray_to(light))
+            Some(spawn(
+                r,
+                prims.get(h.prim as usize)?.surface(r, h.t, h.u, h.v),
+            ))
         })
         .filter(|r| r.is_valid())
         .collect()
 }
 
-/// The three ray sets every measurement in this project uses.
+/// A path tracer's first bounce off diffuse surfaces: from each primary hit, one ray in a
+/// cosine-weighted direction about the surface's normal, on the side the primary ray came
+/// from, started as [`shadow_rays`] start theirs (off the surface by its error bound, so that
+/// no ray can hit the surface it leaves). `prims` are the primitives the hits index; `seed`
+/// draws the directions.
+///
+/// The direction is the normal plus a direction uniform on the sphere, normalised: the sum of
+/// a unit normal and a uniform unit vector is distributed by the cosine about the normal (the
+/// point is uniform on the unit sphere touching the surface, seen from where it touches).
+///
+/// ```
+/// use rt_core::{Accel, BruteForce, Ray, Triangle, glam::Vec3};
+/// use rt_scene::raygen::diffuse_rays;
+/// let floor = [Triangle::new(Vec3::new(-9.0, 0.0, -9.0), Vec3::new(9.0, 0.0, 9.0), Vec3::new(9.0, 0.0, -9.0))];
+/// let primary = vec![Ray::new(Vec3::new(1.0, 5.0, 0.0), -Vec3::Y); 100];
+/// let hits: Vec<_> = primary.iter().map(|r| BruteForce::build(&floor, &()).intersect(r)).collect();
+/// let bounces = diffuse_rays(&primary, &hits, &floor, 7);
+/// assert_eq!(bounces.len(), 100);
+/// // Every bounce leaves the floor upwards, towards where the primary rays came from.
+/// assert!(bounces.iter().all(|r| r.dir().y > 0.0 && r.origin.y > 0.0));
+/// ```
+pub fn diffuse_rays<P: Primitive>(
+    primary: &[Ray],
+    hits: &[Option<Hit>],
+    prims: &[P],
+    seed: u64,
+) -> Vec<Ray> {
+    let mut rng = Rng::new(seed);
+    from_hits(primary, hits, prims, |r, surface| {
+        let n = surface.normal;
+        let facing = if n.dot(r.dir()) > 0.0 { -n } else { n };
+        // A sum that cancels (the uniform vector opposite the normal, almost never) leaves
+        // along the normal.
+        let dir = (facing + rng.unit_vector())
+            .try_normalize()
+            .unwrap_or(facing);
+        surface.spawn_ray(dir)
+    })
+}
+
+/// The ray sets every measurement in this project uses.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum RayKind {
     /// One ray per pixel of a camera's image (closest-hit queries).
@@ -90,18 +145,26 @@ pub enum RayKind {
     Incoherent,
     /// Occlusion rays from the primary hits to [`default_light`] (any-hit queries).
     Shadow,
+    /// One diffuse bounce from each primary hit ([`diffuse_rays`]; closest-hit queries).
+    Diffuse,
 }
 
 impl RayKind {
-    /// All three, in report order.
-    pub const ALL: [RayKind; 3] = [RayKind::Primary, RayKind::Incoherent, RayKind::Shadow];
+    /// All four, in report order.
+    pub const ALL: [RayKind; 4] = [
+        RayKind::Primary,
+        RayKind::Incoherent,
+        RayKind::Shadow,
+        RayKind::Diffuse,
+    ];
 
-    /// The lower-case name reports use (`primary`, `incoherent`, `shadow`).
+    /// The lower-case name reports use (`primary`, `incoherent`, `shadow`, `diffuse`).
     pub fn name(self) -> &'static str {
         match self {
             RayKind::Primary => "primary",
             RayKind::Incoherent => "incoherent",
             RayKind::Shadow => "shadow",
+            RayKind::Diffuse => "diffuse",
         }
     }
 
@@ -113,8 +176,9 @@ impl RayKind {
 
 /// The rays of one kind, exactly as `cargo xtask compare` and the benchmarks trace them:
 /// `width × height` primary rays of `camera`; as many incoherent rays in `bounds` drawn with
-/// `seed`; or one shadow ray per primary hit towards [`default_light`] ([`shadow_rays`]). Shadow
-/// rays need the primary rays' closest hits on `prims`, which `closest_hits` computes (with any
+/// `seed`; one shadow ray per primary hit towards [`default_light`] ([`shadow_rays`]); or one
+/// diffuse bounce per primary hit drawn with `seed` ([`diffuse_rays`]). Shadow rays and bounces
+/// need the primary rays' closest hits on `prims`, which `closest_hits` computes (with any
 /// correct structure: they all give the same answers).
 pub fn rays_of_kind<P: Primitive>(
     kind: RayKind,
@@ -132,6 +196,11 @@ pub fn rays_of_kind<P: Primitive>(
             let primary = camera.primary_rays(width, height);
             let hits = closest_hits(&primary);
             shadow_rays(&primary, &hits, prims, default_light(bounds))
+        }
+        RayKind::Diffuse => {
+            let primary = camera.primary_rays(width, height);
+            let hits = closest_hits(&primary);
+            diffuse_rays(&primary, &hits, prims, seed)
         }
     }
 }
@@ -244,6 +313,39 @@ mod tests {
         assert_eq!(rays[0].dir(), r.dir());
         assert_eq!((rays[0].t_min, rays[0].t_max), (0.5, f32::INFINITY));
         assert_eq!(rays[1].t_max, f32::INFINITY);
+    }
+
+    /// Bounces off a floor seen from above and from below: each leaves on the side its primary
+    /// ray came from, and their directions follow the cosine about the normal (the mean cosine
+    /// of a cosine-weighted hemisphere is 2/3, of a uniform one 1/2).
+    #[test]
+    fn diffuse_bounces_are_cosine_weighted_on_the_incoming_side() {
+        use rt_core::{Accel, BruteForce, Triangle};
+        let floor = [Triangle::new(
+            Vec3::new(-9.0, 0.0, -9.0),
+            Vec3::new(9.0, 0.0, 9.0),
+            Vec3::new(9.0, 0.0, -9.0),
+        )];
+        let accel = BruteForce::build(&floor, &());
+        for side in [1.0f32, -1.0] {
+            let primary =
+                vec![Ray::new(Vec3::new(0.5, 5.0 * side, 0.25), -side * Vec3::Y); 100_000];
+            let hits: Vec<_> = primary.iter().map(|r| accel.intersect(r)).collect();
+            let bounces = diffuse_rays(&primary, &hits, &floor, 3);
+            assert_eq!(bounces.len(), primary.len());
+            assert!(bounces.iter().all(|r| r.dir().y * side > 0.0
+                && r.origin.y * side > 0.0
+                && accel.intersect(r).is_none()));
+            let mean_cos = bounces
+                .iter()
+                .map(|r| (r.dir().y * side) as f64)
+                .sum::<f64>()
+                / bounces.len() as f64;
+            assert!((mean_cos - 2.0 / 3.0).abs() < 0.005, "{mean_cos}");
+            assert_eq!(bounces, diffuse_rays(&primary, &hits, &floor, 3));
+        }
+        // A miss makes no bounce.
+        assert!(diffuse_rays(&[Ray::new(Vec3::Y, Vec3::Y)], &[None], &floor, 3).is_empty());
     }
 
     #[test]

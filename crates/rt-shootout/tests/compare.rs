@@ -120,7 +120,7 @@ fn entry_of<A: Accel<Prim = Triangle> + 'static>() -> Entry {
 #[test]
 fn a_field_of_instances_agrees_on_every_row_and_every_ray_kind() {
     // Forty teapots of about 1,000 triangles, every row's structure under the instances.
-    for kind in ["primary", "incoherent", "shadow"] {
+    for kind in ["primary", "incoherent", "shadow", "diffuse"] {
         let a = args(&[
             "--scene",
             "teapot:1000",

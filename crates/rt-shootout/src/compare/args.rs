@@ -49,6 +49,9 @@ pub enum RayKind {
     Incoherent,
     /// Occlusion rays from the primary hits to a point light (any-hit queries).
     Shadow,
+    /// A diffuse bounce from each primary hit: a cosine-weighted direction about the surface
+    /// normal, started off the surface as shadow rays are (closest-hit queries).
+    Diffuse,
 }
 
 /// Which view primary rays (and the shadow rays from their hits) come from.

@@ -492,36 +492,45 @@ pub(super) fn make_rays(
         RayKind::Primary => raygen::RayKind::Primary,
         RayKind::Incoherent => raygen::RayKind::Incoherent,
         RayKind::Shadow => raygen::RayKind::Shadow,
+        RayKind::Diffuse => raygen::RayKind::Diffuse,
     };
     // With `--bundle`, in tiles, so that neighbouring rays come side by side.
     let primary = || match args.bundle {
         Some(tile) => camera.tiled_rays(args.width, args.height, tile).0,
         None => camera.primary_rays(args.width, args.height),
     };
-    // Shadow rays start at the primary hits, found by a SAH BVH (any correct structure finds
-    // the same ones); they need only the triangles hit, in the world.
+    // Shadow rays and diffuse bounces start at the primary hits, found by a SAH BVH (any
+    // correct structure finds the same ones); they need only the triangles hit, in the world.
+    let primary_hits = || {
+        let primary = primary();
+        let entry = structures::entries_of::<Bvh<Triangle>, Bvh<rt_core::Shape>>()
+            .into_iter()
+            .find(|e| e.name == "bvh-binary")
+            .expect("rt-bvh has a binary preset");
+        let s = source.build(&entry)?;
+        let mut hit_tris = Vec::new();
+        let hits: Vec<Option<Hit>> = primary
+            .iter()
+            .map(|r| {
+                structures::answer(&*s, r, Query::Closest).map(|h| {
+                    hit_tris.push(source.world_triangle(h.prim));
+                    Hit {
+                        prim: hit_tris.len() as u32 - 1,
+                        ..h
+                    }
+                })
+            })
+            .collect();
+        Ok::<_, String>((primary, hits, hit_tris))
+    };
     let rays = match shared_kind {
         raygen::RayKind::Shadow => {
-            let primary = primary();
-            let entry = structures::entries_of::<Bvh<Triangle>, Bvh<rt_core::Shape>>()
-                .into_iter()
-                .find(|e| e.name == "bvh-binary")
-                .expect("rt-bvh has a binary preset");
-            let s = source.build(&entry)?;
-            let mut hit_tris = Vec::new();
-            let hits: Vec<Option<Hit>> = primary
-                .iter()
-                .map(|r| {
-                    structures::answer(&*s, r, Query::Closest).map(|h| {
-                        hit_tris.push(source.world_triangle(h.prim));
-                        Hit {
-                            prim: hit_tris.len() as u32 - 1,
-                            ..h
-                        }
-                    })
-                })
-                .collect();
-            raygen::shadow_rays(&primary, &hits, &hit_tris, raygen::default_light(bounds))
+            let (primary, hits, tris) = primary_hits()?;
+            raygen::shadow_rays(&primary, &hits, &tris, raygen::default_light(bounds))
+        }
+        raygen::RayKind::Diffuse => {
+            let (primary, hits, tris) = primary_hits()?;
+            raygen::diffuse_rays(&primary, &hits, &tris, args.seed)
         }
         raygen::RayKind::Primary => primary(),
         raygen::RayKind::Incoherent => raygen::incoherent_rays(

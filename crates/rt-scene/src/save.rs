@@ -7,8 +7,12 @@
 //!
 //! let teapot = scenes::teapot(0.0);
 //! let bytes = ply_bytes(&teapot, PlyEncoding::BinaryBigEndian);
-//! let back = load_mesh_bytes("teapot.ply", SceneFormat::Ply, &bytes).unwrap();
-//! assert_eq!(back.triangles(), teapot.triangles());
+//! // Reading PLY back needs the `ply` feature (writing does not).
+//! #[cfg(feature = "ply")]
+//! {
+//!     let back = load_mesh_bytes("teapot.ply", SceneFormat::Ply, &bytes).unwrap();
+//!     assert_eq!(back.triangles(), teapot.triangles());
+//! }
 //! ```
 
 use rt_core::Mesh;

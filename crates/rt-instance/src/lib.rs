@@ -21,6 +21,10 @@
 //!   ([`TransformPrimitive`]) and its nearest point found there. The bottom level walks a ball in
 //!   object space that holds the world ball's preimage (its radius times the transform's
 //!   [`stretch`](InstanceTransform::stretch)).
+//! - **Surface points** for the next ray are found in object space and carried to the world
+//!   ([`Instance::surface`], [`InstanceTransform::surface_to_world`]), their error bound grown
+//!   by the transform's rounding both ways, so a ray spawned from one clears its surface when
+//!   the walk carries it back into the instance.
 //!
 //! # Exactness
 //! Every two-level scene answers exactly like [`LinearInstances`] over the same instances: the
@@ -39,8 +43,8 @@
 
 use glam::{Affine3A, DMat3, DVec3, Mat3A, Vec3, Vec3A};
 use rt_core::{
-    Aabb, BallQuery, Counters, DynAccel, Feature, Hit, MtTriangle, NoStats, Primitive, Ray, Stats,
-    Triangle, closest_feature_on_triangle, point_distance,
+    Aabb, BallQuery, Counters, DynAccel, Feature, Hit, MtTriangle, NoStats, Primitive, Ray,
+    Shading, Stats, SurfacePoint, Triangle, closest_feature_on_triangle, point_distance,
 };
 use std::fmt::Debug;
 use std::sync::Arc;
@@ -96,6 +100,11 @@ pub struct InstanceTransform {
 }
 
 impl InstanceTransform {
+    /// The rounding of carrying a point through a transform, in units of `f32::EPSILON`
+    /// relative to the magnitudes summed (three products and three sums: at most about three
+    /// units, with fused multiply-adds or without).
+    pub const TRANSFORM_ULPS: f32 = 4.0;
+
     /// The largest condition number accepted: 2¹⁶. A ray carried into object space keeps about
     /// `24 - log2(condition)` bits of its direction, so 2¹⁶ leaves 8.
     pub const MAX_CONDITION: f64 = 65536.0;
@@ -186,6 +195,80 @@ impl InstanceTransform {
             ray.t_min,
             t_max,
         )
+    }
+
+    /// A surface point of a hit in this instance, found in object space (from the bottom
+    /// level's primitive: [`Primitive::surface`] with the hit's `t`, `u`, `v`), carried to the
+    /// world: the point by the transform, the normal by its inverse transpose (unit; the same
+    /// side of the surface as in object space, so a mirror keeps a sphere's outward normal
+    /// outward), and the error bound grown to cover the transform's rounding both ways. A ray
+    /// spawned from the result ([`SurfacePoint::spawn_ray`], `spawn_ray_to`) and traced in the
+    /// world is carried back into this instance by [`ray_to_object`](Self::ray_to_object), and
+    /// the bound keeps its origin off the surface there too.
+    ///
+    /// The bound: a world offset `d` along the world normal moves the object-space origin at
+    /// least `d / σ` along the object normal (`σ` the transform's largest singular value), and
+    /// that must exceed what the object point's own bound asks for (the same offset in object
+    /// space), the world point's rounding carried back (lengthened at most
+    /// [`stretch`](Self::stretch) times), and the rounding of the ray's origin on its way back
+    /// ([`TRANSFORM_ULPS`](Self::TRANSFORM_ULPS) of the magnitudes each transform involves):
+    /// `√3 · σ · (object bound + stretch · forward rounding + backward rounding)`.
+    ///
+    /// ```
+    /// use rt_core::{Primitive, Ray, Triangle, glam::{Affine3A, Vec3}};
+    /// use rt_instance::InstanceTransform;
+    /// let floor = Triangle::new(Vec3::new(-1.0, 0.0, -1.0), Vec3::new(0.0, 0.0, 1.0), Vec3::new(1.0, 0.0, -1.0));
+    /// // Stood up on its side, stretched and moved.
+    /// let xf = InstanceTransform::new(
+    ///     Affine3A::from_translation(Vec3::new(5.0, 0.0, 0.0))
+    ///         * Affine3A::from_rotation_z(std::f32::consts::FRAC_PI_2)
+    ///         * Affine3A::from_scale(Vec3::new(1.0, 1.0, 4.0)),
+    /// )
+    /// .unwrap();
+    /// let world_ray = Ray::new(Vec3::new(9.0, 0.1, 0.2), -Vec3::X);
+    /// let object_ray = xf.ray_to_object(&world_ray);
+    /// let hit = floor.intersect(&object_ray, f32::INFINITY).unwrap();
+    /// let surface = xf.surface_to_world(floor.surface(&object_ray, hit.t, hit.u, hit.v));
+    /// assert!((surface.point - world_ray.at(hit.t)).length() < 1e-5);
+    /// assert!(surface.normal.abs().abs_diff_eq(Vec3::X, 1e-6));
+    /// // The bounce leaves the wall without seeing it again.
+    /// let bounce = surface.spawn_ray(Vec3::new(1.0, 0.3, 0.0));
+    /// assert!(floor.intersect(&xf.ray_to_object(&bounce), f32::INFINITY).is_none());
+    /// ```
+    pub fn surface_to_world(&self, s: SurfacePoint) -> SurfacePoint {
+        let (a, b) = (self.to_world.matrix3, self.to_world.translation);
+        let (inv, c) = (self.to_object.matrix3, self.to_object.translation);
+        let point = self.to_world.transform_point3(s.point);
+        let rounding = |m: f32| Self::TRANSFORM_ULPS * f32::EPSILON * m;
+        let forward = rounding(norm_inf(a) * s.point.abs().max_element() + b.abs().max_element());
+        let back = rounding(norm_inf(inv) * point.abs().max_element() + c.abs().max_element());
+        // Both factors are rounded up by a millionth: their quotient may fall short of σ by
+        // about that much, which the hundredth of a percent covers.
+        let sigma = self.condition / self.stretch * 1.0001;
+        SurfacePoint {
+            point,
+            normal: self.normal_to_world(s.normal).unwrap_or(s.normal),
+            error: 3f32.sqrt() * sigma * (s.error + self.stretch * forward + back),
+        }
+    }
+
+    /// A hit's [`Shading`] (of a [`rt_core::Mesh`] in object space) in the world: the surface
+    /// by [`surface_to_world`](Self::surface_to_world), the shading normal by the inverse
+    /// transpose, the texture coordinates as they are.
+    pub fn shading_to_world(&self, s: Shading) -> Shading {
+        let surface = self.surface_to_world(s.surface);
+        Shading {
+            surface,
+            normal: self.normal_to_world(s.normal).unwrap_or(surface.normal),
+            uv: s.uv,
+        }
+    }
+
+    /// The object-space normal `n` in the world, unit length: the inverse transpose's image.
+    fn normal_to_world(&self, n: Vec3) -> Option<Vec3> {
+        (self.to_object.matrix3.transpose() * Vec3A::from(n))
+            .try_normalize()
+            .map(Vec3::from)
     }
 
     /// The box around the world image of the object-space box `b`, padded by 2⁻¹⁸ of the
@@ -443,6 +526,17 @@ impl<P: Primitive> Instance<P> {
     #[inline]
     pub fn reach(&self) -> f32 {
         self.reach
+    }
+
+    /// The world surface point of `hit`, a hit of the world ray `ray` on this instance's
+    /// primitive `prim` (the one `hit.prim` names in the bottom level's input): `prim`'s
+    /// surface in object space carried to the world
+    /// ([`InstanceTransform::surface_to_world`]). Spawn the next ray from it as from a
+    /// one-level hit's.
+    pub fn surface(&self, prim: &P, ray: &Ray, hit: &InstanceHit) -> SurfacePoint {
+        let object = self.transform.ray_to_object(ray);
+        self.transform
+            .surface_to_world(prim.surface(&object, hit.t, hit.u, hit.v))
     }
 
     /// The closest hit of the world ray in this instance up to `t_max`: the bottom level's hit
@@ -906,3 +1000,176 @@ impl<P: Primitive> TwoLevel<P> for LinearInstances<P> {
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
+
+/// The largest absolute row sum of `m`: how much it can lengthen a vector's largest
+/// coordinate, and so the magnitude of the terms a transform sums.
+fn norm_inf(m: Mat3A) -> f32 {
+    let t = m.transpose();
+    [t.x_axis, t.y_axis, t.z_axis]
+        .map(|row| row.abs().element_sum())
+        .into_iter()
+        .fold(0.0, f32::max)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use glam::Quat;
+    use rt_core::Rng;
+
+    /// A random affine map: a rotation, scales from 1/30 to 30 on each axis (a mirror on some),
+    /// a shear, and a translation of up to `shift`.
+    fn random_transform(rng: &mut Rng, shift: f32) -> Affine3A {
+        let rotation = Quat::from_axis_angle(rng.unit_vector(), rng.range(0.0, 6.3));
+        let scale = Vec3::new(
+            rng.range(-1.5, 1.5),
+            rng.range(-1.5, 1.5),
+            rng.range(-1.5, 1.5),
+        )
+        .map(|e| 10f32.powf(e) * if rng.f32() < 0.2 { -1.0 } else { 1.0 });
+        let shear = Mat3A::from_cols(
+            Vec3A::X,
+            Vec3A::new(rng.range(-0.5, 0.5), 1.0, 0.0),
+            Vec3A::new(rng.range(-0.5, 0.5), rng.range(-0.5, 0.5), 1.0),
+        );
+        Affine3A::from_translation(rng.in_box(Vec3::splat(-shift), Vec3::splat(shift)))
+            * Affine3A::from_mat3(glam::Mat3::from(shear))
+            * Affine3A::from_scale_rotation_translation(scale, rotation, Vec3::ZERO)
+    }
+
+    /// Rays spawned from world surface points of instanced triangles (random transforms with
+    /// mirrors, shears and condition numbers up to the thousands; object scales from 10⁻³ to
+    /// 10³; instances far from the origin), in any direction off the plane, carried back into
+    /// the instance as a two-level walk carries them: none hits its own triangle, and one
+    /// aimed back at the surface from the same origin does (the offset went to its side only).
+    #[test]
+    fn rays_spawned_from_instance_hits_leave_their_surface() {
+        let mut rng = Rng::new(11);
+        let (mut checked, mut backs) = (0, 0);
+        for scale in [1e-3f32, 1.0, 1e3] {
+            for shift in [0.0f32, 10.0, 1e4] {
+                for _ in 0..100 {
+                    let Ok(xf) = InstanceTransform::new(random_transform(&mut rng, shift * scale))
+                    else {
+                        continue;
+                    };
+                    let v = [0; 3].map(|_| rng.in_box(Vec3::splat(-scale), Vec3::splat(scale)));
+                    let tri = Triangle::new(v[0], v[1], v[2]);
+                    if tri.normal().length() < 1e-3 * scale * scale {
+                        continue;
+                    }
+                    for _ in 0..20 {
+                        let (a, b) = (rng.range(0.02, 0.98), rng.range(0.02, 0.98));
+                        let (u, v) = if a + b > 0.98 {
+                            (0.98 - a, 0.98 - b)
+                        } else {
+                            (a, b)
+                        };
+                        let (u, v) = (u.max(0.01), v.max(0.01));
+                        let s = xf.surface_to_world(tri.surface_at(u, v));
+                        let dir = rng.unit_vector();
+                        if dir.dot(s.normal).abs() < 1e-2 {
+                            continue;
+                        }
+                        let ray = s.spawn_ray(dir);
+                        let object = xf.ray_to_object(&ray);
+                        assert!(
+                            tri.intersect(&object, f32::INFINITY).is_none(),
+                            "self-hit: scale {scale}, shift {shift}, {tri:?}, {:?}, {}",
+                            xf.to_world(),
+                            ray.to_rust()
+                        );
+                        // Where the offset is small beside the triangle (it is not for tiny
+                        // triangles far from the origin under ill-conditioned maps, where the
+                        // transforms' rounding alone spans the triangle), the origin still
+                        // lies over it.
+                        let w = [tri.v0, tri.v1, tri.v2].map(|p| xf.to_world().transform_point3(p));
+                        let edge = (w[1] - w[0])
+                            .length()
+                            .min((w[2] - w[1]).length())
+                            .min((w[0] - w[2]).length());
+                        if (ray.origin - s.point).length() < 1e-3 * edge {
+                            let back = Ray::new(ray.origin, -dir.dot(s.normal).signum() * s.normal);
+                            assert!(
+                                tri.intersect(&xf.ray_to_object(&back), f32::INFINITY)
+                                    .is_some(),
+                                "the offset crossed the surface: {}",
+                                back.to_rust()
+                            );
+                            backs += 1;
+                        }
+                        checked += 1;
+                    }
+                }
+            }
+        }
+        assert!(
+            checked > 10_000 && backs > checked / 3,
+            "{checked} rays, {backs} back"
+        );
+    }
+
+    /// The world normal is the object normal carried by the inverse transpose: perpendicular
+    /// to the world image of the triangle's edges, on the object normal's side.
+    #[test]
+    fn world_normals_are_perpendicular_to_world_edges() {
+        let mut rng = Rng::new(12);
+        for _ in 0..500 {
+            let Ok(xf) = InstanceTransform::new(random_transform(&mut rng, 10.0)) else {
+                continue;
+            };
+            let v = [0; 3].map(|_| rng.in_box(Vec3::splat(-1.0), Vec3::ONE));
+            let tri = Triangle::new(v[0], v[1], v[2]);
+            if tri.normal().length() < 1e-2 {
+                continue;
+            }
+            let s = xf.surface_to_world(tri.surface_at(0.3, 0.3));
+            let w = v.map(|p| xf.to_world().transform_point3(p));
+            for e in [w[1] - w[0], w[2] - w[0]] {
+                assert!(
+                    s.normal.dot(e.normalize()).abs() < 1e-3,
+                    "{:?}",
+                    xf.to_world()
+                );
+            }
+            // On the object normal's side: a point just off the object surface along its
+            // normal lands on the world normal's side.
+            let off = xf
+                .to_world()
+                .transform_point3(tri.surface_at(0.3, 0.3).point + 0.1 * tri.normal().normalize());
+            assert!((off - s.point).dot(s.normal) > 0.0);
+            assert!((s.normal.length() - 1.0).abs() < 1e-5);
+        }
+    }
+
+    /// Under a rotation and a translation, the world bound stays within a small factor of the
+    /// bound of the same triangle given in world coordinates: the transforms' rounding adds
+    /// little where nothing is stretched.
+    #[test]
+    fn rigid_motions_keep_the_bound_tight() {
+        let mut rng = Rng::new(13);
+        for _ in 0..500 {
+            let rotation = Quat::from_axis_angle(rng.unit_vector(), rng.range(0.0, 6.3));
+            let shift = rng.in_box(Vec3::splat(-100.0), Vec3::splat(100.0));
+            let xf = InstanceTransform::new(Affine3A::from_rotation_translation(rotation, shift))
+                .unwrap();
+            let v = [0; 3].map(|_| rng.in_box(Vec3::splat(-1.0), Vec3::ONE));
+            let tri = Triangle::new(v[0], v[1], v[2]);
+            let world = Triangle::new(
+                xf.to_world().transform_point3(v[0]),
+                xf.to_world().transform_point3(v[1]),
+                xf.to_world().transform_point3(v[2]),
+            );
+            let (s, one_level) = (
+                xf.surface_to_world(tri.surface_at(0.2, 0.3)),
+                world.surface_at(0.2, 0.3),
+            );
+            assert!(
+                s.error <= 4.0 * one_level.error,
+                "{} against {}",
+                s.error,
+                one_level.error
+            );
+        }
+    }
+}

@@ -374,6 +374,7 @@ pub fn check_two_level_case<T: TwoLevel<Triangle> + 'static>(
                 ))
             })?;
         }
+        check_batches(&scene, &case.rays)?;
         for (p, max) in scene_points(&world, &case.rays) {
             probe.set(super::Doing::Point(p, max));
             let expected = linear.closest_point(p, max);
@@ -409,6 +410,39 @@ pub fn check_two_level_case<T: TwoLevel<Triangle> + 'static>(
         }
         Ok(())
     })
+}
+
+/// The batch queries ([`TwoLevel::intersect_batch`], [`TwoLevel::occluded_batch`]) against the
+/// single ones, the same bits in every slot: over the case's rays as they come, reversed, and
+/// cut to the first 0, 1, 255, 256 and 257 (a batch's chunk is 256 rays).
+fn check_batches<T: TwoLevel<Triangle>>(scene: &T, rays: &[Ray]) -> Result<(), String> {
+    let reversed: Vec<Ray> = rays.iter().rev().copied().collect();
+    let mut lists: Vec<&[Ray]> = vec![rays, &reversed];
+    for n in [0, 1, 255, 256, 257] {
+        lists.push(&rays[..n.min(rays.len())]);
+    }
+    let bits = |h: Option<InstanceHit>| {
+        h.map(|h| (h.instance, h.id, h.prim, [h.t, h.u, h.v].map(f32::to_bits)))
+    };
+    for list in lists {
+        let mut hits = vec![None; list.len()];
+        scene.intersect_batch(list, &mut hits);
+        let mut blocked = vec![false; list.len()];
+        scene.occluded_batch(list, &mut blocked);
+        for ((ray, &hit), &blocked) in list.iter().zip(&hits).zip(&blocked) {
+            let single = scene.intersect(ray);
+            if bits(hit) != bits(single) || blocked != scene.occluded(ray) {
+                return Err(format!(
+                    "{}: a batch of {} rays answered {hit:?} (blocked: {blocked}) where the single queries answer {single:?} (blocked: {})\n  ray: {}",
+                    T::NAME,
+                    list.len(),
+                    scene.occluded(ray),
+                    ray.to_rust()
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Whether the two-level answer `got` matches the flattened scene's `flat` within the rounding

@@ -42,6 +42,7 @@
 #![warn(missing_docs)]
 
 use glam::{Affine3A, DMat3, DVec3, Mat3A, Vec3, Vec3A};
+use rt_core::batch::{self, RaySource};
 use rt_core::{
     Aabb, BallQuery, Counters, DynAccel, Feature, Hit, MtTriangle, NoStats, Primitive, Ray,
     Shading, Stats, SurfacePoint, Triangle, closest_feature_on_triangle, point_distance,
@@ -849,6 +850,29 @@ pub trait TwoLevel<P: Primitive>: Sized + Send + Sync {
     #[inline]
     fn intersect(&self, ray: &Ray) -> Option<InstanceHit> {
         self.intersect_with(ray, &mut NoStats)
+    }
+
+    /// [`intersect`](Self::intersect) of every ray into the same slot of `out` (as many as
+    /// both have), on every thread of the current rayon pool as [`rt_core::batch`] runs its
+    /// queries: rays from a slice or from flat rows ([`RaySource`]). A scene may override it
+    /// to trace rays together, and must then answer each exactly as the single query does (the
+    /// conformance kit checks it).
+    fn intersect_batch<R: RaySource + ?Sized>(&self, rays: &R, out: &mut [Option<InstanceHit>]) {
+        batch::for_each_ray_chunk(rays, out, |rays, out| {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = self.intersect(r);
+            }
+        });
+    }
+
+    /// [`occluded`](Self::occluded) of every ray into the same slot of `out`, as
+    /// [`intersect_batch`](Self::intersect_batch) runs.
+    fn occluded_batch<R: RaySource + ?Sized>(&self, rays: &R, out: &mut [bool]) {
+        batch::for_each_ray_chunk(rays, out, |rays, out| {
+            for (o, r) in out.iter_mut().zip(rays) {
+                *o = self.occluded(r);
+            }
+        });
     }
 
     /// Whether anything is hit in the ray's interval.

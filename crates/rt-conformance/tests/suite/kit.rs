@@ -197,6 +197,33 @@ fn the_test_macro_lists_every_scene_of_the_kit() {
     assert_eq!(listed, rt_conformance::SCENES);
 }
 
+/// The `TwoLevel` methods a faulty two-level scene below takes unchanged from the linear
+/// reference it wraps (`self.0`).
+macro_rules! forward_to_linear {
+    () => {
+        fn instances(&self) -> &[rt_instance::Instance<Triangle>] {
+            self.0.instances()
+        }
+        fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
+            self.0.occluded_with(ray, stats)
+        }
+        fn closest_point_with<S: Stats>(
+            &self,
+            point: rt_core::glam::Vec3,
+            max_distance: f32,
+            stats: &mut S,
+        ) -> Option<rt_instance::InstancePointHit> {
+            self.0.closest_point_with(point, max_distance, stats)
+        }
+        fn bounds(&self) -> rt_core::Aabb {
+            self.0.bounds()
+        }
+        fn memory_bytes(&self) -> usize {
+            self.0.memory_bytes()
+        }
+    };
+}
+
 /// The linear reference with one fault: it never looks at the instance at index 1, or it
 /// reports a hit's `t` a little late.
 struct SkipsOne<const LATE: bool>(rt_instance::LinearInstances<Triangle>);
@@ -213,9 +240,6 @@ impl<const LATE: bool> rt_instance::TwoLevel<Triangle> for SkipsOne<LATE> {
         }
         Self(rt_instance::LinearInstances::build(instances))
     }
-    fn instances(&self) -> &[rt_instance::Instance<Triangle>] {
-        self.0.instances()
-    }
     fn intersect_with<S: Stats>(
         &self,
         ray: &Ray,
@@ -228,23 +252,7 @@ impl<const LATE: bool> rt_instance::TwoLevel<Triangle> for SkipsOne<LATE> {
                 ..h
             })
     }
-    fn occluded_with<S: Stats>(&self, ray: &Ray, stats: &mut S) -> bool {
-        self.0.occluded_with(ray, stats)
-    }
-    fn closest_point_with<S: Stats>(
-        &self,
-        point: rt_core::glam::Vec3,
-        max_distance: f32,
-        stats: &mut S,
-    ) -> Option<rt_instance::InstancePointHit> {
-        self.0.closest_point_with(point, max_distance, stats)
-    }
-    fn bounds(&self) -> rt_core::Aabb {
-        self.0.bounds()
-    }
-    fn memory_bytes(&self) -> usize {
-        self.0.memory_bytes()
-    }
+    forward_to_linear!();
 }
 
 fn brute_bottom(t: &[Triangle]) -> std::sync::Arc<dyn rt_core::DynAccel<Triangle>> {
@@ -269,6 +277,44 @@ fn a_two_level_scene_that_loses_an_instance_or_a_t_fails_with_its_ray_named() {
         &case,
     )
     .expect("the linear reference agrees with itself and with the flattened scene");
+}
+
+/// The linear reference with a batch query that writes each answer one slot late, as an
+/// override that lost track of its rays' order would.
+struct ShiftedBatch(rt_instance::LinearInstances<Triangle>);
+
+impl rt_instance::TwoLevel<Triangle> for ShiftedBatch {
+    const NAME: &'static str = "shifted-batch";
+    fn build(instances: Vec<rt_instance::Instance<Triangle>>) -> Self {
+        Self(rt_instance::LinearInstances::build(instances))
+    }
+    fn intersect_with<S: Stats>(
+        &self,
+        ray: &Ray,
+        stats: &mut S,
+    ) -> Option<rt_instance::InstanceHit> {
+        self.0.intersect_with(ray, stats)
+    }
+    fn intersect_batch<R: rt_core::batch::RaySource + ?Sized>(
+        &self,
+        rays: &R,
+        out: &mut [Option<rt_instance::InstanceHit>],
+    ) {
+        self.0.intersect_batch(rays, out);
+        out.rotate_right(1.min(out.len()));
+    }
+    forward_to_linear!();
+}
+
+#[test]
+fn a_two_level_batch_that_misplaces_answers_fails_with_its_ray_named() {
+    let case = rt_conformance::two_level_scene("mirrored_and_scaled").remove(0);
+    let shifted = rt_conformance::check_two_level_case::<ShiftedBatch>(&[brute_bottom], &case)
+        .expect_err("answers in the wrong slots must be caught");
+    assert!(
+        shifted.contains("a batch of") && shifted.contains("ray: Ray::"),
+        "{shifted}"
+    );
 }
 
 /// Brute force, except that building from a mesh or another source reads the triangles in

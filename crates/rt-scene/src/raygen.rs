@@ -111,7 +111,8 @@ fn from_hits<P: Primitive>(
 /// use rt_scene::raygen::diffuse_rays;
 /// let floor = [Triangle::new(Vec3::new(-9.0, 0.0, -9.0), Vec3::new(9.0, 0.0, 9.0), Vec3::new(9.0, 0.0, -9.0))];
 /// let primary = vec![Ray::new(Vec3::new(1.0, 5.0, 0.0), -Vec3::Y); 100];
-/// let hits: Vec<_> = primary.iter().map(|r| BruteForce::build(&floor, &()).intersect(r)).collect();
+/// let accel = BruteForce::build(&floor, &());
+/// let hits: Vec<_> = primary.iter().map(|r| accel.intersect(r)).collect();
 /// let bounces = diffuse_rays(&primary, &hits, &floor, 7);
 /// assert_eq!(bounces.len(), 100);
 /// // Every bounce leaves the floor upwards, towards where the primary rays came from.

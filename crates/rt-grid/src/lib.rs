@@ -288,3 +288,7 @@ impl<P: Primitive> Accel for Grid<P> {
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
+
+// Debug and test builds of the crates that use a `Grid` as a trait object (the shootout, the
+// renderer, the tests) link this crate's copy of its methods instead of compiling their own.
+rt_core::share_dyn_accel!(Grid);

@@ -267,3 +267,7 @@ impl<P: Primitive> Accel for HGrid<P> {
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
+
+// Debug and test builds of the crates that use a `HGrid` as a trait object (the shootout, the
+// renderer, the tests) link this crate's copy of its methods instead of compiling their own.
+rt_core::share_dyn_accel!(HGrid);

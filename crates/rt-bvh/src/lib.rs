@@ -1052,6 +1052,8 @@ impl<P: Primitive> Accel for Bvh<P> {
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
 
-// Debug and test builds of the crates that use a `Bvh` as a trait object (the shootout, the
-// renderer, the tests) link this crate's copy of its methods instead of compiling their own.
+// With `share-dyn`, debug and test builds of the crates that use a `Bvh` as a trait
+// object (the shootout, the renderer's tests) link this crate's copy of its methods instead of
+// compiling their own.
+#[cfg(feature = "share-dyn")]
 rt_core::share_dyn_accel!(Bvh);

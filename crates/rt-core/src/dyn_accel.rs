@@ -450,7 +450,8 @@ impl<A: Accel> DynAccel<A::Prim> for A {
 
 /// Compiles [`DynAccel`] of a structure type over [`Triangle`](crate::Triangle)s and
 /// [`Shape`](crate::Shape)s into the crate that invokes it, in debug and test builds: each
-/// structure crate invokes it once, for its own type.
+/// structure crate invokes it once, for its own type, behind its `share-dyn` feature, which the
+/// crates that make those trait objects turn on (a crate that never makes one compiles none).
 ///
 /// Why: a trait object's methods are compiled in the crate that makes the object, for every type
 /// it is made of, and the shootout, the renderer and the tests of every structure each make the
@@ -461,7 +462,8 @@ impl<A: Accel> DynAccel<A::Prim> for A {
 /// assertions on, which is how a crate's source can tell a debug or test build.
 // PERF: `cargo test --workspace --no-run`, the workspace's own crates only (dependencies built),
 // AMD Zen 4, two cores, before -> after: 498 s -> 338 s, 986 -> 654 seconds of compiling;
-// rt-shootout 275 -> 75 s, rt-bvh's tests 182 -> 60 s, rt-render's 126 -> 6 s.
+// rt-shootout 275 -> 75 s, rt-bvh's tests 182 -> 60 s, rt-render's 126 -> 6 s. The copy costs
+// rt-bvh's own debug build (opt-level 0) 1.0 -> 6.3 s, hence the feature.
 #[macro_export]
 #[doc(hidden)]
 macro_rules! share_dyn_accel {

@@ -268,6 +268,8 @@ impl<P: Primitive> Accel for HGrid<P> {
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
 
-// Debug and test builds of the crates that use a `HGrid` as a trait object (the shootout, the
-// renderer, the tests) link this crate's copy of its methods instead of compiling their own.
+// With `share-dyn`, debug and test builds of the crates that use a `HGrid` as a trait
+// object (the shootout, the renderer's tests) link this crate's copy of its methods instead of
+// compiling their own.
+#[cfg(feature = "share-dyn")]
 rt_core::share_dyn_accel!(HGrid);

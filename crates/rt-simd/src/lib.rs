@@ -83,7 +83,8 @@ pub fn prefetch<T>(v: &[T], first: usize, lines: usize) {
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
 
-// Debug and test builds of the crates that use a `BundledBruteForce` as a trait object (the
-// shootout, the renderer, the tests) link this crate's copy of its methods instead of compiling
-// their own.
+// With `share-dyn`, debug and test builds of the crates that use a `BundledBruteForce` as a trait
+// object (the shootout, the renderer's tests) link this crate's copy of its methods instead of
+// compiling their own.
+#[cfg(feature = "share-dyn")]
 rt_core::share_dyn_accel!(BundledBruteForce);

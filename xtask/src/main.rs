@@ -5,8 +5,8 @@
 //!   `rt-shootout` library, which other crates call with their own structures added.
 //! - `explain`: one ray's walk through one structure, step by step (see [`explain`]).
 //! - `draw`: a slice through a built structure as SVG (see [`draw`]).
-//! - `render`: a Whitted-style picture through any structure, or per-pixel cost heatmaps (see
-//!   [`render`]).
+//! - `render`: a Whitted-style or path-traced picture through any structure, or per-pixel cost
+//!   heatmaps (see [`render`]).
 //! - `animate`: refitting against rebuilding on a moving scene, frame by frame (see
 //!   [`animate`]).
 //! - `scale`: the size ladder, build and trace cost and memory from thousands to millions of

@@ -1,5 +1,6 @@
-//! `cargo xtask render`: a Whitted-style picture of a scene through one structure (or several,
-//! whose pictures must be the same bytes), or per-pixel cost heatmaps of several side by side.
+//! `cargo xtask render`: a Whitted-style or path-traced picture of a scene through one structure
+//! (or several, whose pictures must be the same bytes), or per-pixel cost heatmaps of several
+//! side by side.
 //! The renderer is the `rt-render` library; this module only reads flags, picks the scene and
 //! structures, shows progress and writes the PNG.
 
@@ -29,9 +30,15 @@ pub struct Args {
     /// Image height in pixels.
     #[arg(long, default_value_t = 768)]
     pub height: u32,
-    /// Rays along a path, the primary ray included (1: no reflection or refraction).
+    /// Rays along a path, the primary ray included (1: no reflection, refraction or bounce).
     #[arg(long, default_value_t = 5)]
     pub depth: u32,
+    /// How light is followed: Whitted's mirror and glass rays, or a path tracer's bounces.
+    #[arg(long, value_enum, default_value_t = Integrator::Whitted)]
+    pub integrator: Integrator,
+    /// Paths per pixel, with `--integrator path`.
+    #[arg(long, default_value_t = 4)]
+    pub samples: u32,
     /// Worker threads [default: all cores].
     #[arg(short = 'j', long)]
     pub threads: Option<usize>,
@@ -40,8 +47,19 @@ pub struct Args {
     pub out: PathBuf,
     /// Instead of a picture, the primary rays' cost per pixel, one panel per structure on one
     /// colour scale.
-    #[arg(long, value_enum)]
+    #[arg(long, value_enum, conflicts_with_all = ["integrator", "samples"])]
     pub heatmap: Option<Heatmap>,
+}
+
+/// How `render` follows light.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Integrator {
+    /// Whitted's: shadow rays to the lights, mirror and refracted rays (`rt_render::render`).
+    Whitted,
+    /// A path tracer (`rt_render::render_path`): diffuse bounces as well, several paths per
+    /// pixel, rendered once with single rays and once with batches, which must give the same
+    /// bytes; prints each bounce depth's speed both ways.
+    Path,
 }
 
 /// What a heatmap shows per pixel.
@@ -91,6 +109,12 @@ pub fn run(args: &Args) -> Result<bool, String> {
             args.depth
         ));
     }
+    if args.samples == 0 || args.samples > 4096 {
+        return Err(format!(
+            "--samples {} is not usable: 1 to 4096 paths per pixel",
+            args.samples
+        ));
+    }
     // Checked before any work, so a bad size fails at once, not after loading a mesh.
     rt_render::Image::new(args.width, args.height).map_err(|e| e.to_string())?;
     check_output(&args.out, "PNG")?;
@@ -100,6 +124,7 @@ pub fn run(args: &Args) -> Result<bool, String> {
         .build()
         .map_err(|e| format!("cannot start {threads} threads: {e}"))?;
     pool.install(|| match args.heatmap {
+        None if args.integrator == Integrator::Path => path_picture(args, &scene, threads),
         None => picture(args, &scene, threads),
         Some(heatmap) => heatmaps(args, &scene, heatmap.metric()).map(|()| true),
     })
@@ -235,6 +260,113 @@ fn picture(args: &Args, scene: &RenderScene, threads: usize) -> Result<bool, Str
         }
     }
     Ok(same)
+}
+
+/// Path-traces the picture through every row, with single rays and with batches; writes the
+/// first row's, prints each bounce depth's speed both ways, and returns whether every picture
+/// (both ways, every row) is the same bytes.
+fn path_picture(args: &Args, scene: &RenderScene, threads: usize) -> Result<bool, String> {
+    let entries = rows(args)?;
+    for entry in &entries {
+        shape_builder(entry)?;
+    }
+    let shapes = scene.shapes();
+    let options = rt_render::PathOptions {
+        width: args.width,
+        height: args.height,
+        samples: args.samples,
+        bounces: args.depth - 1,
+        seed: 1,
+    };
+    let mut first: Option<(String, rt_render::Image)> = None;
+    let mut same = true;
+    for entry in &entries {
+        let tracer = shape_builder(entry)?(&shapes);
+        let mut runs = Vec::new();
+        for tracing in [rt_render::Tracing::Single, rt_render::Tracing::Batch] {
+            let bar = progress_bar(&format!("path {} {tracing:?}", entry.name));
+            let start = Instant::now();
+            let run = rt_render::render_path(
+                scene,
+                &shapes,
+                tracer.as_ref(),
+                &options,
+                tracing,
+                &|done, total| {
+                    bar.set_length(total as u64);
+                    bar.set_position(done as u64);
+                },
+            )
+            .map_err(|e| e.to_string())?;
+            bar.finish_and_clear();
+            runs.push((run, start.elapsed()));
+        }
+        let [(single, single_time), (batch, batch_time)] =
+            <[_; 2]>::try_from(runs).map_err(|_| "two renders".to_string())?;
+        let mut verdict = match &first {
+            None => {
+                batch.image.save_png(&args.out).map_err(|e| e.to_string())?;
+                format!("wrote {}", args.out.display())
+            }
+            Some((name, expected)) if *expected == batch.image => format!("same bytes as {name}"),
+            Some((name, _)) => {
+                same = false;
+                format!("DIFFERENT bytes from {name}")
+            }
+        };
+        if single.image != batch.image {
+            same = false;
+            verdict.push_str(", single rays and batches DIFFERENT");
+        }
+        println!(
+            "{verdict}: {} {}×{}, {} paths per pixel, depth {}, {} primitives; {} rendered in {:.2} s with single rays, {:.2} s with batches, on {} threads",
+            args.scene,
+            args.width,
+            args.height,
+            args.samples,
+            args.depth,
+            shapes.len(),
+            entry.name,
+            single_time.as_secs_f64(),
+            batch_time.as_secs_f64(),
+            threads
+        );
+        println!("{}", depth_table(&single.depths, &batch.depths));
+        if first.is_none() {
+            first = Some((entry.name.clone(), batch.image));
+        }
+    }
+    Ok(same)
+}
+
+/// Each bounce depth's rays, their hit (or blocked) share and speed with single rays and with
+/// batches, in million rays per second per thread (rays over the time the threads spent in the
+/// trace calls).
+fn depth_table(single: &[rt_render::DepthStats], batch: &[rt_render::DepthStats]) -> String {
+    let rate = |rays: u64, t: std::time::Duration| rays as f64 / t.as_secs_f64().max(1e-9) / 1e6;
+    let share = |part: u64, all: u64| 100.0 * part as f64 / all.max(1) as f64;
+    let mut out = String::from(
+        "depth  closest rays   hit  single  batch  ratio | shadow rays  blocked  single  batch  ratio\n",
+    );
+    for (d, (s, b)) in single.iter().zip(batch).enumerate() {
+        let (cs, cb) = (rate(s.rays, s.trace), rate(b.rays, b.trace));
+        let (ss, sb) = (
+            rate(s.shadow_rays, s.shadow_trace),
+            rate(b.shadow_rays, b.shadow_trace),
+        );
+        let _ = writeln!(
+            out,
+            "{d:>5} {:>13} {:>4.0}% {cs:>7.2} {cb:>6.2} {:>5.2}x | {:>11} {:>7.0}% {ss:>7.2} {sb:>6.2} {:>5.2}x",
+            s.rays,
+            share(s.hits, s.rays),
+            cb / cs,
+            s.shadow_rays,
+            share(s.blocked, s.shadow_rays),
+            sb / ss.max(1e-9),
+        );
+    }
+    out.push_str("(single and batch: million rays per second per thread, in the trace calls)");
+    out
 }
 
 fn heatmaps(args: &Args, scene: &RenderScene, metric: Metric) -> Result<(), String> {

@@ -90,6 +90,53 @@ fn several_rows_render_the_same_picture() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
+/// The path tracer renders through every row twice, with single rays and with batches: every
+/// picture is the same bytes, and each row prints a table of its bounce depths.
+#[test]
+fn path_tracing_renders_the_same_picture_with_single_rays_and_batches() {
+    let dir = scratch("path");
+    let out = dir.join("p.png");
+    let o = render(&[
+        "--integrator",
+        "path",
+        "--samples",
+        "1",
+        "--depth",
+        "3",
+        "--width",
+        "32",
+        "--height",
+        "24",
+        "-s",
+        "bvh,grid",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert!(o.status.success(), "{o:?}");
+    assert_eq!(png_size(&out), (32, 24));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let verdicts: Vec<&str> = text
+        .lines()
+        .filter(|l| l.contains(" rendered in "))
+        .collect();
+    assert_eq!(verdicts.len(), 2, "{text}");
+    assert!(verdicts[0].starts_with("wrote ") && verdicts[0].contains(" bvh rendered"));
+    assert!(
+        verdicts[1].starts_with("same bytes as bvh:") && verdicts[1].contains(" grid rendered")
+    );
+    assert!(!text.contains("DIFFERENT"), "{text}");
+    // Per row: the header and depths 0, 1 and 2; depth 0 traces one ray per pixel.
+    let depth_rows: Vec<Vec<&str>> = text
+        .lines()
+        .map(|l| l.split_whitespace().collect::<Vec<_>>())
+        .filter(|w| w.len() > 2 && w[0].parse::<u32>().is_ok())
+        .collect();
+    assert_eq!(depth_rows.len(), 6, "{text}");
+    assert_eq!(depth_rows[0][..2], ["0", "768"], "{text}");
+    assert_eq!(depth_rows[2][0], "2", "{text}");
+    std::fs::remove_dir_all(&dir).ok();
+}
+
 #[test]
 fn heatmap_strip_has_one_panel_per_structure() {
     let dir = scratch("heat");
@@ -148,6 +195,18 @@ fn bad_input_is_one_line_and_exit_2() {
         "is not usable",
     );
     assert_one_line_error(&render(&["--depth", "0", "--out", out]), "--depth 0");
+    assert_one_line_error(
+        &render(&["--integrator", "path", "--samples", "0", "--out", out]),
+        "--samples 0 is not usable",
+    );
+    assert_one_line_error(
+        &render(&["--integrator", "paths", "--out", out]),
+        "invalid value 'paths' for '--integrator",
+    );
+    assert_one_line_error(
+        &render(&["--heatmap", "visits", "--integrator", "path", "--out", out]),
+        "cannot be used with",
+    );
     assert_one_line_error(
         &render(&[
             "--out",

@@ -227,7 +227,7 @@ pub(crate) fn per_pixel<T: Copy + Default + Send>(
 
 /// Fills a `width × height` image tile by tile in parallel: `tile(x0, y0, w, h)` returns the
 /// `w × h` pixels of the tile at `(x0, y0)`, row by row.
-fn per_tile<T: Copy + Default + Send>(
+pub(crate) fn per_tile<T: Copy + Default + Send>(
     width: u32,
     height: u32,
     progress: &(dyn Fn(usize, usize) + Sync),

@@ -3,7 +3,7 @@
 //! shadow ray sees, then a mirror ray and a refracted ray (Snell's law, Schlick's Fresnel
 //! weights, total internal reflection) where the material asks, to a fixed depth.
 
-use crate::{PointLight, RenderScene};
+use crate::{Material, PointLight, RenderScene};
 use rt_core::DynAccel;
 use rt_core::{Hit, Primitive, Ray, Shape, SurfacePoint, glam::Vec3};
 
@@ -20,11 +20,11 @@ pub(crate) struct Context<'a> {
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Lit {
     prim: usize,
-    at: SurfacePoint,
+    pub at: SurfacePoint,
     /// Unit shading normal, facing the viewer.
-    normal: Vec3,
+    pub normal: Vec3,
     /// Geometric normal, facing the viewer.
-    geometric: Vec3,
+    pub geometric: Vec3,
     /// The ray's unit direction.
     d: Vec3,
     /// Whether the ray arrives at the front of the surface.
@@ -91,7 +91,8 @@ impl Context<'_> {
             .collect()
     }
 
-    fn sky(&self, dir: Vec3) -> Vec3 {
+    /// The sky's colour seen in direction `dir`.
+    pub fn sky(&self, dir: Vec3) -> Vec3 {
         let (horizon, zenith) = self.scene.sky;
         let up = dir.normalize_or_zero().y.max(0.0);
         horizon.lerp(zenith, up.sqrt())
@@ -181,29 +182,8 @@ impl Context<'_> {
         mut occluded: impl FnMut(usize, &Ray) -> bool,
     ) -> Vec3 {
         let material = self.scene.material(lit.prim);
-        let &Lit {
-            at,
-            normal,
-            geometric,
-            d,
-            entering,
-            ..
-        } = lit;
-        let albedo = match material.checker {
-            Some(other) => {
-                let s = material.checker_size;
-                let (i, k) = (
-                    (at.point.x / s).floor() as i64,
-                    (at.point.z / s).floor() as i64,
-                );
-                if (i + k).rem_euclid(2) == 0 {
-                    material.color
-                } else {
-                    other
-                }
-            }
-            None => material.color,
-        };
+        let &Lit { at, normal, d, .. } = lit;
+        let albedo = albedo(material, at.point);
         let opaque = 1.0 - material.transmission;
         let mut color = self.scene.ambient * albedo * material.diffuse * opaque;
         for (k, light) in self.scene.lights.iter().enumerate() {
@@ -221,13 +201,7 @@ impl Context<'_> {
         if depth + 1 >= self.max_depth {
             return color;
         }
-        let reflect = |n: Vec3| d - 2.0 * d.dot(n) * n;
-        // A reflected direction must leave on the viewer's side of the geometry; the shading
-        // normal can bend it below, where the geometric normal cannot.
-        let mut r = reflect(normal);
-        if r.dot(geometric) <= 0.0 {
-            r = reflect(geometric);
-        }
+        let r = lit.reflected();
         if material.mirror > 0.0 {
             color += material.mirror
                 * opaque
@@ -235,28 +209,67 @@ impl Context<'_> {
                 * self.radiance(&at.spawn_ray(r), depth + 1);
         }
         if material.transmission > 0.0 {
-            let eta = if entering {
-                1.0 / material.ior
-            } else {
-                material.ior
-            };
-            let cos_i = -d.dot(normal);
-            let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
             let reflected = self.radiance(&at.spawn_ray(r), depth + 1);
-            let light = if sin2_t >= 1.0 {
+            let light = match lit.refracted(material.ior) {
+                Some((t, fresnel)) => {
+                    fresnel * reflected
+                        + (1.0 - fresnel) * self.radiance(&at.spawn_ray(t), depth + 1)
+                }
                 // Total internal reflection.
-                reflected
-            } else {
-                let cos_t = (1.0 - sin2_t).sqrt();
-                let t = (eta * d + (eta * cos_i - cos_t) * normal).normalize();
-                // Schlick's approximation, with the cosine on the optically thinner side.
-                let r0 = ((1.0 - material.ior) / (1.0 + material.ior)).powi(2);
-                let c = if entering { cos_i } else { cos_t };
-                let fresnel = r0 + (1.0 - r0) * (1.0 - c).powi(5);
-                fresnel * reflected + (1.0 - fresnel) * self.radiance(&at.spawn_ray(t), depth + 1)
+                None => reflected,
             };
             color += material.transmission * material.color * light;
         }
         color
+    }
+}
+
+impl Lit {
+    /// The mirror direction of the view direction. It leaves on the viewer's side of the
+    /// geometry: where the shading normal would bend it below, the geometric normal reflects.
+    pub fn reflected(&self) -> Vec3 {
+        let d = self.d;
+        let reflect = |n: Vec3| d - 2.0 * d.dot(n) * n;
+        let r = reflect(self.normal);
+        if r.dot(self.geometric) <= 0.0 {
+            reflect(self.geometric)
+        } else {
+            r
+        }
+    }
+
+    /// The refracted direction into (or out of) a surface of index of refraction `ior`, with
+    /// the share of the light reflected instead (Schlick's approximation of the Fresnel term);
+    /// `None` at total internal reflection.
+    pub fn refracted(&self, ior: f32) -> Option<(Vec3, f32)> {
+        let (d, normal) = (self.d, self.normal);
+        let eta = if self.entering { 1.0 / ior } else { ior };
+        let cos_i = -d.dot(normal);
+        let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
+        if sin2_t >= 1.0 {
+            return None;
+        }
+        let cos_t = (1.0 - sin2_t).sqrt();
+        let t = (eta * d + (eta * cos_i - cos_t) * normal).normalize();
+        // Schlick's approximation, with the cosine on the optically thinner side.
+        let r0 = ((1.0 - ior) / (1.0 + ior)).powi(2);
+        let c = if self.entering { cos_i } else { cos_t };
+        Some((t, r0 + (1.0 - r0) * (1.0 - c).powi(5)))
+    }
+}
+
+/// The diffuse colour of `material` at `point`: its colour, or its checkerboard's square there.
+pub(crate) fn albedo(material: &Material, point: Vec3) -> Vec3 {
+    match material.checker {
+        Some(other) => {
+            let s = material.checker_size;
+            let (i, k) = ((point.x / s).floor() as i64, (point.z / s).floor() as i64);
+            if (i + k).rem_euclid(2) == 0 {
+                material.color
+            } else {
+                other
+            }
+        }
+        None => material.color,
     }
 }

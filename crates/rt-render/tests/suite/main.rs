@@ -3,4 +3,5 @@
 //! traversals again, which made most of the workspace's test build time.
 
 mod acne;
+mod path;
 mod pictures;

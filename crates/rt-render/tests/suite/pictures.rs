@@ -24,7 +24,7 @@ fn picture(scene: &RenderScene, tracer: &dyn DynAccel<Shape>) -> Image {
 }
 
 /// Every structure with its default parameters, and the binary BVH, over `shapes`.
-fn structures(shapes: &[Shape]) -> Vec<(&'static str, Box<dyn DynAccel<Shape>>)> {
+pub fn structures(shapes: &[Shape]) -> Vec<(&'static str, Box<dyn DynAccel<Shape>>)> {
     vec![
         ("bvh", Box::new(Bvh::build(shapes, &Default::default()))),
         (

@@ -172,18 +172,10 @@ pub fn render(
     let raster = scene.camera.raster(options.width, options.height);
     let pixels = per_tile(options.width, options.height, progress, |x0, y0, w, h| {
         let mut out = vec![[0u8; 3]; (w * h) as usize];
-        // The tile's pixels in blocks of 8x8, each block row by row: a block's primary rays
-        // make one coherent bundle.
-        let mut at = Vec::with_capacity(out.len());
-        for by in (0..h).step_by(BLOCK as usize) {
-            for bx in (0..w).step_by(BLOCK as usize) {
-                for y in by..(by + BLOCK).min(h) {
-                    for x in bx..(bx + BLOCK).min(w) {
-                        at.push((y * w + x) as usize);
-                    }
-                }
-            }
-        }
+        // Block by block, so that each block's primary rays make one coherent bundle.
+        let at: Vec<usize> = block_order(w, h)
+            .map(|(x, y)| (y * w + x) as usize)
+            .collect();
         let rays: Vec<Ray> = at
             .iter()
             .map(|&i| {
@@ -227,6 +219,17 @@ pub(crate) fn per_pixel<T: Copy + Default + Send>(
 
 /// Fills a `width × height` image tile by tile in parallel: `tile(x0, y0, w, h)` returns the
 /// `w × h` pixels of the tile at `(x0, y0)`, row by row.
+/// The pixels `(x, y)` of a `w × h` tile in blocks of [`BLOCK`]×[`BLOCK`], each block row by
+/// row: a block's primary rays make one coherent bundle.
+pub(crate) fn block_order(w: u32, h: u32) -> impl Iterator<Item = (u32, u32)> {
+    (0..h).step_by(BLOCK as usize).flat_map(move |by| {
+        (0..w).step_by(BLOCK as usize).flat_map(move |bx| {
+            (by..(by + BLOCK).min(h))
+                .flat_map(move |y| (bx..(bx + BLOCK).min(w)).map(move |x| (x, y)))
+        })
+    })
+}
+
 pub(crate) fn per_tile<T: Copy + Default + Send>(
     width: u32,
     height: u32,

@@ -15,7 +15,7 @@
 //! structures' answers alone: single rays and batches give the same bytes, as do all correct
 //! structures.
 
-use crate::image::{encode, per_tile};
+use crate::image::{block_order, encode, per_tile};
 use crate::whitted::{Context, albedo};
 use crate::{Image, ImageError, RenderScene};
 use rt_core::glam::Vec3;
@@ -186,16 +186,6 @@ pub fn render_path(
             pixels,
         },
         depths: depths.into_inner().unwrap_or_else(|e| e.into_inner()),
-    })
-}
-
-/// The pixels of a `w × h` tile in blocks of 8×8, each block row by row.
-fn block_order(w: u32, h: u32) -> impl Iterator<Item = (u32, u32)> {
-    const B: u32 = 8;
-    (0..h).step_by(B as usize).flat_map(move |by| {
-        (0..w).step_by(B as usize).flat_map(move |bx| {
-            (by..(by + B).min(h)).flat_map(move |y| (bx..(bx + B).min(w)).map(move |x| (x, y)))
-        })
     })
 }
 

@@ -543,7 +543,12 @@ fn segment_distance(p: Vec3, a: Vec3, b: Vec3) -> f32 {
 /// # Panics
 /// With the shrunk failing case.
 pub fn check_two_level_random<T: TwoLevel<Triangle> + 'static>(bottoms: &[BottomBuilder]) {
-    let coord = || prop_oneof![(-4i32..=4).prop_map(|i| i as f32 * 0.5), -2.0f32..2.0];
+    let coord = || {
+        prop_oneof![
+            (-4i32..=4).prop_map(|i| i as f32 * 0.5),
+            crate::float_in(-2.0, 2.0)
+        ]
+    };
     let vec3 = move || (coord(), coord(), coord()).prop_map(|(x, y, z)| Vec3::new(x, y, z));
     let tri = (vec3(), vec3(), vec3()).prop_map(|(a, b, c)| Triangle::new(a, b, c));
     let scale_c = || {
@@ -552,15 +557,15 @@ pub fn check_two_level_random<T: TwoLevel<Triangle> + 'static>(bottoms: &[Bottom
             Just(-1.0f32),
             Just(2.0f32),
             Just(0.5f32),
-            0.25f32..4.0
+            crate::float_in(0.25, 4.0)
         ]
     };
     let transform = prop_oneof![
         2 => Just(Affine3A::IDENTITY),
         4 => (
             (scale_c(), scale_c(), scale_c()),
-            prop::array::uniform3(-1.0f32..1.0),
-            0.0f32..6.3,
+            prop::array::uniform3(crate::float_in(-1.0, 1.0)),
+            crate::float_in(0.0, 6.3),
             vec3(),
             prop::bool::ANY,
         )

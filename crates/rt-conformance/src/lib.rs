@@ -1174,12 +1174,32 @@ pub fn check_random_part<A: Accel<Prim = Triangle> + 'static>(
     })
 }
 
+/// Floats in `lo..hi` for proptest, on a grid of 2^24 steps, shrinking towards 0 (or towards
+/// the bound nearer 0).
+///
+/// Why not proptest's own `lo..hi`: its float sampler (proptest 1.12) checks with a
+/// `debug_assert!` that a sample overshoots a bound by less than one step, and on some seeds
+/// that check fails (the sample itself is clamped into range). Students' crates and this
+/// workspace test with debug assertions on, so the kit drew a panic instead of a case (a CI run,
+/// `rt-hgrid`'s `deep::random_scenes`). An integer range mapped to floats has no such check.
+pub(crate) fn float_in(lo: f32, hi: f32) -> impl Strategy<Value = f32> + Clone {
+    debug_assert!(lo < hi && lo.is_finite() && hi.is_finite());
+    let step = (hi - lo) / (1 << 24) as f32;
+    let (first, end) = ((lo / step).ceil() as i64, (hi / step).ceil() as i64);
+    (first..end).prop_map(move |k| (k as f32 * step).clamp(lo, hi.next_down()))
+}
+
 /// Runs proptest on random triangle scenes and rays (see [`check_random`]) with `check`.
 fn random_scenes(
     name: &str,
     check: impl Fn(&[Triangle], &[Ray]) -> Result<(), String>,
 ) -> Result<(), String> {
-    let coord = || prop_oneof![(-6i32..=6).prop_map(|i| i as f32 * 0.5), -4.0f32..4.0];
+    let coord = || {
+        prop_oneof![
+            (-6i32..=6).prop_map(|i| i as f32 * 0.5),
+            float_in(-4.0, 4.0)
+        ]
+    };
     let vec3 = move || (coord(), coord(), coord()).prop_map(|(x, y, z)| Vec3::new(x, y, z));
     let tri = (vec3(), vec3(), vec3()).prop_map(|(a, b, c)| Triangle::new(a, b, c));
     let dir_c = || {
@@ -1188,7 +1208,7 @@ fn random_scenes(
             Just(-0.0f32),
             Just(1.0f32),
             Just(-1.0f32),
-            -1.0f32..1.0
+            float_in(-1.0, 1.0)
         ]
     };
     // A ray either aims at a lattice point on a triangle (vertex, edge midpoint, centroid) or
@@ -1197,8 +1217,8 @@ fn random_scenes(
         vec3(),
         (dir_c(), dir_c(), dir_c()),
         prop::option::of((any::<prop::sample::Index>(), 0usize..7)),
-        prop_oneof![Just(f32::INFINITY), 0.1f32..20.0],
-        prop_oneof![3 => Just(0.0f32), 1 => 0.0f32..2.0],
+        prop_oneof![Just(f32::INFINITY), float_in(0.1, 20.0)],
+        prop_oneof![3 => Just(0.0f32), 1 => float_in(0.0, 2.0)],
     );
     let strategy = (
         prop::collection::vec(tri, 0..60),
@@ -1286,13 +1306,13 @@ fn proptest_failure<T: fmt::Debug>(
 /// With the shrunk failing case.
 pub fn check_random_spheres<A: Accel<Prim = Sphere> + 'static>(params: &A::Params) {
     let sphere = (
-        prop::array::uniform3(-5.0f32..5.0),
-        prop_oneof![0.01f32..2.0, Just(0.0), Just(f32::NAN)],
+        prop::array::uniform3(float_in(-5.0, 5.0)),
+        prop_oneof![float_in(0.01, 2.0), Just(0.0), Just(f32::NAN)],
     )
         .prop_map(|(c, r)| Sphere::new(Vec3::from(c), r));
     let ray = (
-        prop::array::uniform3(-8.0f32..8.0),
-        prop::array::uniform3(-1.0f32..1.0),
+        prop::array::uniform3(float_in(-8.0, 8.0)),
+        prop::array::uniform3(float_in(-1.0, 1.0)),
     );
     let strategy = (
         prop::collection::vec(sphere, 0..50),
@@ -2104,3 +2124,46 @@ pub fn shared_meshes_dir() -> Option<std::path::PathBuf> {
 #[cfg(doctest)]
 #[doc = include_str!("../README.md")]
 struct ReadmeDoctests;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::strategy::ValueTree;
+
+    /// Every draw lies in `lo..hi`, draws spread over the range, and a draw shrinks to the
+    /// bound nearer 0 (to 0 itself when the range holds it).
+    #[test]
+    fn float_in_stays_in_range_and_shrinks_towards_zero() {
+        let mut runner = TestRunner::deterministic();
+        for (lo, hi) in [
+            (-4.0, 4.0),
+            (0.1, 20.0),
+            (0.01, 2.0),
+            (0.25, 4.0),
+            (0.0, 6.3),
+        ] {
+            let strategy = float_in(lo, hi);
+            let (mut low_half, mut high_half) = (0, 0);
+            for _ in 0..2000 {
+                let mut tree = strategy.new_tree(&mut runner).unwrap();
+                let x = tree.current();
+                assert!((lo..hi).contains(&x), "{x} outside {lo}..{hi}");
+                if x < (lo + hi) / 2.0 {
+                    low_half += 1;
+                } else {
+                    high_half += 1;
+                }
+                while tree.simplify() {}
+                let least = if lo <= 0.0 && hi > 0.0 { 0.0 } else { lo };
+                assert!(
+                    (tree.current() - least).abs() <= (hi - lo) * 1e-6,
+                    "{lo}..{hi}"
+                );
+            }
+            assert!(
+                low_half > 800 && high_half > 800,
+                "{lo}..{hi}: {low_half}/{high_half}"
+            );
+        }
+    }
+}

@@ -124,14 +124,19 @@ pub fn check_refit_scenes<A: Refit<Prim = Triangle>>(params: &A::Params) {
 /// # Panics
 /// With the shrunk failing case.
 pub fn check_refit_random<A: Refit<Prim = Triangle>>(params: &A::Params) {
-    let coord = || prop_oneof![(-6i32..=6).prop_map(|i| i as f32 * 0.5), -4.0f32..4.0];
+    let coord = || {
+        prop_oneof![
+            (-6i32..=6).prop_map(|i| i as f32 * 0.5),
+            crate::float_in(-4.0, 4.0)
+        ]
+    };
     let vec3 = move || (coord(), coord(), coord()).prop_map(|(x, y, z)| Vec3::new(x, y, z));
     let tri = (vec3(), vec3(), vec3()).prop_map(|(a, b, c)| Triangle::new(a, b, c));
     let strategy = (
         prop::collection::vec(tri, 0..40),
         0usize..4,
         any::<u64>(),
-        0.0f32..3.0,
+        crate::float_in(0.0, 3.0),
     );
     let mut runner = TestRunner::new(Config {
         failure_persistence: None,

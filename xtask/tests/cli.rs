@@ -132,6 +132,7 @@ fn default_scene_json_has_every_field_and_no_mismatch() {
             "bvh-median",
             "bvh-middle",
             "bvh-reinserted",
+            "bvh-stream",
             "kdtree",
             "kdtree-fewest-tests",
             "kdtree-wald-havran",

@@ -31,6 +31,7 @@ fn steps() -> Vec<(&'static str, BvhParams)> {
         ablation: Ablation {
             sort_children,
             any_hit_path,
+            stream_walk: false,
         },
         ..BvhParams::wide()
     };

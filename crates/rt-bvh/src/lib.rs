@@ -222,6 +222,7 @@ mod overlap;
 pub mod persist;
 mod refit;
 mod regions;
+mod stream;
 mod traverse;
 mod validate;
 
@@ -309,8 +310,9 @@ pub struct BvhParams {
 }
 
 /// Measurement only: switches that turn off one optimisation of the wide traversal each, so that
-/// `cargo run --release -p rt-bvh --example steps` can measure what it gains. Turning one off is
-/// never faster; the default (both on) is what every user wants.
+/// `cargo run --release -p rt-bvh --example steps` can measure what it gains, and one that turns
+/// on a traversal still being measured. Turning an optimisation off is never faster; the
+/// default is what every user wants.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Ablation {
     /// Closest hit: visit the children a ray enters nearest first (sorted by entry distance).
@@ -319,6 +321,13 @@ pub struct Ablation {
     /// Any hit: the dedicated path (children in lane order, no sorting, stop at the first hit).
     /// `false` answers occlusion with the closest-hit traversal.
     pub any_hit_path: bool,
+    /// The stream queries ([`Accel::intersect_stream`], [`Accel::occluded_stream`]): `true`
+    /// walks the rays as streams, node by node (the dynamic ray stream traversal of Barringer
+    /// & Akenine-Möller, 2014); `false`, the default, traces them one by one. Off until it is
+    /// measured faster than single rays (`cargo xtask compare --stream -s bvh-stream` prints
+    /// both; the `stream` preset turns it on): exact either way, and the conformance kit
+    /// checks both.
+    pub stream_walk: bool,
 }
 
 impl Default for Ablation {
@@ -326,6 +335,7 @@ impl Default for Ablation {
         Self {
             sort_children: true,
             any_hit_path: true,
+            stream_walk: false,
         }
     }
 }
@@ -682,6 +692,59 @@ impl<P: Primitive> Bvh<P> {
     }
 }
 
+impl<P: Primitive> Bvh<P> {
+    /// The stream queries' core: each of the first `slots` rays answered through
+    /// `answer(slot, answer)`, where an any-hit answer is `Some` when occluded. With
+    /// [`Ablation::stream_walk`], the wide tree walks the rays in streams of [`stream::CHUNK`]
+    /// (`stream.rs`), where a ray that cannot travel takes the single-ray path, which answers
+    /// it at once; otherwise every ray takes the single-ray path.
+    fn stream_query<S: Stats, const ANY: bool>(
+        &self,
+        rays: &[Ray],
+        slots: usize,
+        stats: &mut S,
+        mut answer: impl FnMut(usize, Option<Hit>),
+    ) {
+        let rays = &rays[..rays.len().min(slots)];
+        let wide = match &self.tree {
+            Tree::Wide(w)
+                if w.ablation.stream_walk
+                    && !w.nodes.is_empty()
+                    && (!ANY || w.ablation.any_hit_path) =>
+            {
+                w
+            }
+            _ => {
+                for (slot, ray) in rays.iter().enumerate() {
+                    answer(slot, rt_simd::bundle::single::<_, S, ANY>(self, ray, stats));
+                }
+                return;
+            }
+        };
+        stream::with_scratch(|sc| {
+            for (c, chunk) in rays.chunks(stream::CHUNK).enumerate() {
+                if sc.start(chunk) {
+                    let sort = wide.ablation.sort_children;
+                    wide.with_leaves(OneStream::<S, ANY>(chunk, sort, sc, stats));
+                }
+                for (i, ray) in chunk.iter().enumerate() {
+                    let best = sc.best[i];
+                    let hit = if !ray.is_valid() {
+                        rt_simd::bundle::single::<_, S, ANY>(self, ray, stats)
+                    } else if best.prim == u32::MAX {
+                        None
+                    } else if ANY {
+                        Some(rt_simd::bundle::BLOCKED)
+                    } else {
+                        Some(best)
+                    };
+                    answer(c * stream::CHUNK + i, hit);
+                }
+            }
+        });
+    }
+}
+
 /// A traversal to run over a wide tree's leaves, whichever kind they are: [`Wide::with_leaves`]
 /// picks the leaf test once and hands it to [`LeafWalk::walk`], so every traversal (single
 /// rays, bundles) shares one choice of kernels.
@@ -762,6 +825,24 @@ impl<S: Stats, const ANY: bool> LeafWalk for OneBundle<'_, '_, S, ANY> {
     }
 }
 
+/// One stream through [`stream::wide_stream`].
+struct OneStream<'a, S, const ANY: bool>(&'a [Ray], bool, &'a mut stream::Scratch, &'a mut S);
+
+impl<S: Stats, const ANY: bool> LeafWalk for OneStream<'_, S, ANY> {
+    type Out = ();
+    #[inline(always)]
+    fn walk<L: traverse::Leaves>(self, nodes: &[WideNode], isa: Isa, leaves: &L) {
+        isa.wide(stream::WideStream::<L, S, ANY> {
+            nodes,
+            leaves,
+            rays: self.0,
+            sort: self.1,
+            scratch: self.2,
+            stats: self.3,
+        })
+    }
+}
+
 impl<P: Primitive> Wide<P> {
     /// Runs `walk` with this tree's leaves and kernels.
     #[inline(always)]
@@ -825,6 +906,18 @@ impl<P: Primitive> Accel for Bvh<P> {
             ("median", BvhParams::median()),
             ("middle", BvhParams::middle()),
             ("reinserted", BvhParams::reinserted()),
+            // The wide tree whose stream queries walk the rays together
+            // ([`Ablation::stream_walk`]), for `compare --stream` to measure.
+            (
+                "stream",
+                BvhParams {
+                    ablation: Ablation {
+                        stream_walk: true,
+                        ..Ablation::default()
+                    },
+                    ..BvhParams::wide()
+                },
+            ),
         ]
     }
 
@@ -974,6 +1067,24 @@ impl<P: Primitive> Accel for Bvh<P> {
             return;
         }
         self.bundle_query::<S, true>(rays, out.len(), None, stats, |slot, hit| {
+            out[slot] = hit.is_some()
+        });
+    }
+
+    /// Rays one by one, or with [`Ablation::stream_walk`] in streams (`stream.rs`).
+    #[inline]
+    fn intersect_stream_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        stats: &mut S,
+    ) {
+        self.stream_query::<S, false>(rays, out.len(), stats, |slot, hit| out[slot] = hit);
+    }
+
+    #[inline]
+    fn occluded_stream_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
+        self.stream_query::<S, true>(rays, out.len(), stats, |slot, hit| {
             out[slot] = hit.is_some()
         });
     }

@@ -11,8 +11,8 @@ use rt_core::glam::Vec3;
 use rt_core::query::BLOCKS;
 use rt_core::trace::{self, Event, Place};
 use rt_core::{
-    AnyHit, ClosestHit, Hit, PrimHit, Primitive, Ray, RayQuery, SLAB_FAR_SCALE, Stats, Triangle,
-    TriangleTest, leaf,
+    AnyHit, ClosestHit, Hit, PrimHit, Primitive, Ray, RayQuery, SLAB_FAR_SCALE, Shear, Stats,
+    Triangle, TriangleTest, leaf,
 };
 use rt_simd::{Lanes, Simd, WithLanes};
 use std::ops::ControlFlow;
@@ -596,6 +596,25 @@ pub(crate) fn wide<X: Wide, L: Leaves, S: Stats, Q: RayQuery>(
     q: &mut Q,
     stats: &mut S,
 ) {
+    wide_from(simd, nodes, 0, leaves, ray, None, sort, q, stats);
+}
+
+/// [`wide`] over the subtree of node `root` only, with the ray's shear for the watertight test
+/// if it is known: how a stream (`stream.rs`) hands a ray on to walk alone where few rays go
+/// together.
+#[inline(always)]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn wide_from<X: Wide, L: Leaves, S: Stats, Q: RayQuery>(
+    simd: X,
+    nodes: &[WideNode],
+    root: usize,
+    leaves: &L,
+    ray: &Ray,
+    shear: Option<Shear>,
+    sort: bool,
+    q: &mut Q,
+    stats: &mut S,
+) {
     // PERF: the root is tested before the triangle tests' part of the ray is set up, which a
     // ray that misses every child never needs: single-threaded, interleaved runs of both builds,
     // bunny primary rays 1.04x and incoherent 1.03x as fast, shadow rays unchanged.
@@ -612,21 +631,24 @@ pub(crate) fn wide<X: Wide, L: Leaves, S: Stats, Q: RayQuery>(
     let boxes = kernels::box_ray(simd, ray);
     stats.node_visit();
     trace::report(stats, || Event::Enter {
-        place: Place::Node(0),
+        place: Place::Node(root as u32),
         t0: ray.t_min,
         t1: f32::INFINITY,
         bounds: None,
     });
-    let (mut mask, mut t_entry) = kernels::slab8(simd, &nodes[0], &boxes, q.t_far());
+    let (mut mask, mut t_entry) = kernels::slab8(simd, &nodes[root], &boxes, q.t_far());
     if mask == 0 {
         trace::report(stats, || {
             Event::Note("the ray misses every child box of the root")
         });
         return;
     }
-    let r = RayData::new(simd, ray, boxes);
+    let r = match shear {
+        Some(shear) => RayData::with_shear(simd, ray, boxes, shear),
+        None => RayData::new(simd, ray, boxes),
+    };
     let mut stack = Stack::<(u32, f32), WIDE_STACK>::new();
-    let mut node = &nodes[0];
+    let mut node = &nodes[root];
     loop {
         // `node`'s children the ray enters (`mask`, entered at `t_entry`): the one to visit
         // next, if any, the others pushed.

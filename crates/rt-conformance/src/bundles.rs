@@ -239,65 +239,96 @@ fn counted_and_uneven<A: Accel>(
     any: bool,
     probe: &Probe,
 ) -> Result<(), String> {
-    let name = A::NAME;
     let Some(first) = rays.first() else {
         return Ok(());
     };
     probe.bundle(first, rays.len());
-    let single: Vec<Option<Hit>> = rays.iter().map(|r| accel.intersect(r)).collect();
-    let mut counted = vec![None; rays.len()];
-    let mut counters = Counters::default();
-    accel.intersect_bundle_with(rays, &mut counted, &mut counters);
-    if let Some(i) = (0..rays.len()).find(|&i| !same_bits(counted[i], single[i])) {
-        return Err(format!(
-            "{name}: intersect_bundle_with(Counters) gives {:?} where intersect gives {:?}, for ray {}",
-            counted[i],
-            single[i],
-            rays[i].to_rust()
-        ));
-    }
-    // Three slots more than rays: the extra ones keep what they held.
-    let marker = Some(Hit {
-        prim: 7,
-        t: -1.0,
-        u: 0.0,
-        v: 0.0,
-    });
-    let mut longer = vec![marker; rays.len() + 3];
-    accel.intersect_bundle(rays, &mut longer);
-    if longer[rays.len()..].iter().any(|&h| !same_bits(h, marker))
-        || (0..rays.len()).any(|i| !same_bits(longer[i], single[i]))
-    {
-        return Err(format!(
-            "{name}: intersect_bundle with {} rays and {} answer slots must answer the rays and leave the other slots alone",
-            rays.len(),
-            longer.len()
-        ));
-    }
-    // Fewer slots than rays: the first rays are answered.
-    let mut shorter = vec![None; rays.len() / 2];
-    accel.intersect_bundle(rays, &mut shorter);
-    if (0..shorter.len()).any(|i| !same_bits(shorter[i], single[i])) {
-        return Err(format!(
-            "{name}: intersect_bundle with {} rays and {} answer slots must answer the first {} rays",
-            rays.len(),
-            shorter.len(),
-            shorter.len()
-        ));
-    }
-    if any {
-        let blocked: Vec<bool> = rays.iter().map(|r| accel.occluded(r)).collect();
-        let mut got = vec![true; rays.len() + 3];
-        accel.occluded_bundle_with(rays, &mut got, &mut counters);
-        if got[..rays.len()] != blocked[..] || got[rays.len()..].iter().any(|&b| !b) {
+    let slices = SliceQueries {
+        what: "bundle",
+        counted: |r: &[Ray], o: &mut [Option<Hit>], c: &mut Counters| {
+            accel.intersect_bundle_with(r, o, c)
+        },
+        blocked: |r: &[Ray], o: &mut [bool], c: &mut Counters| accel.occluded_bundle_with(r, o, c),
+    };
+    slices.check(accel, rays, any)
+}
+
+/// A pair of slice queries (the bundle or the stream queries) for [`SliceQueries::check`]:
+/// `what` names them in messages (`intersect_{what}`).
+pub(crate) struct SliceQueries<I, B> {
+    pub what: &'static str,
+    pub counted: I,
+    pub blocked: B,
+}
+
+impl<I, B> SliceQueries<I, B>
+where
+    I: Fn(&[Ray], &mut [Option<Hit>], &mut Counters),
+    B: Fn(&[Ray], &mut [bool], &mut Counters),
+{
+    /// Counting changes no answer, and unequal slices answer as many rays as both have and
+    /// leave the other slots alone; with `any`, the occlusion query too.
+    pub fn check<A: Accel>(&self, accel: &A, rays: &[Ray], any: bool) -> Result<(), String> {
+        let (name, what) = (A::NAME, self.what);
+        let single: Vec<Option<Hit>> = rays.iter().map(|r| accel.intersect(r)).collect();
+        let mut counted = vec![None; rays.len()];
+        let mut counters = Counters::default();
+        (self.counted)(rays, &mut counted, &mut counters);
+        if let Some(i) = (0..rays.len()).find(|&i| !same_bits(counted[i], single[i])) {
             return Err(format!(
-                "{name}: occluded_bundle_with(Counters) with {} rays and {} slots must answer as occluded does and leave the other slots alone",
-                rays.len(),
-                got.len()
+                "{name}: intersect_{what}_with(Counters) gives {:?} where intersect gives {:?}, \
+                 for ray {}",
+                counted[i],
+                single[i],
+                rays[i].to_rust()
             ));
         }
+        // Three slots more than rays: the extra ones keep what they held.
+        let marker = Some(Hit {
+            prim: 7,
+            t: -1.0,
+            u: 0.0,
+            v: 0.0,
+        });
+        let mut longer = vec![marker; rays.len() + 3];
+        (self.counted)(rays, &mut longer, &mut Counters::default());
+        if longer[rays.len()..].iter().any(|&h| !same_bits(h, marker))
+            || (0..rays.len()).any(|i| !same_bits(longer[i], single[i]))
+        {
+            return Err(format!(
+                "{name}: intersect_{what} with {} rays and {} answer slots must answer the rays \
+                 and leave the other slots alone",
+                rays.len(),
+                longer.len()
+            ));
+        }
+        // Fewer slots than rays: the first rays are answered.
+        let mut shorter = vec![None; rays.len() / 2];
+        (self.counted)(rays, &mut shorter, &mut Counters::default());
+        if (0..shorter.len()).any(|i| !same_bits(shorter[i], single[i])) {
+            return Err(format!(
+                "{name}: intersect_{what} with {} rays and {} answer slots must answer the first \
+                 {} rays",
+                rays.len(),
+                shorter.len(),
+                shorter.len()
+            ));
+        }
+        if any {
+            let blocked: Vec<bool> = rays.iter().map(|r| accel.occluded(r)).collect();
+            let mut got = vec![true; rays.len() + 3];
+            (self.blocked)(rays, &mut got, &mut counters);
+            if got[..rays.len()] != blocked[..] || got[rays.len()..].iter().any(|&b| !b) {
+                return Err(format!(
+                    "{name}: occluded_{what}_with(Counters) with {} rays and {} slots must \
+                     answer as occluded does and leave the other slots alone",
+                    rays.len(),
+                    got.len()
+                ));
+            }
+        }
+        Ok(())
     }
-    Ok(())
 }
 
 /// Checks that a structure with its own bundle traversal walks coherent rays together: primary

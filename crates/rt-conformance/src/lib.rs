@@ -28,7 +28,8 @@
 //! and the structure must report the number of valid primitives it kept. The bundle queries
 //! ([`Accel::intersect_bundle`], [`Accel::occluded_bundle`]) must give, ray for ray, the same
 //! bits as the single queries, whatever bundles the rays come in ([`compare_bundles`]), and so
-//! must every batch query ([`rt_core::batch`], [`rt_sdf::batch`]), slot for slot, on threads
+//! must the stream queries ([`Accel::intersect_stream`], [`Accel::occluded_stream`]) in any
+//! order and at any length ([`compare_streams`]), and every batch query ([`rt_core::batch`], [`rt_sdf::batch`]), slot for slot, on threads
 //! other than the one that built the structure ([`compare_batches`]; on the fixed scenes, whose
 //! hundreds of rays fill several chunks of a batch).
 //!
@@ -66,6 +67,7 @@ mod inside;
 mod instances;
 mod refit;
 mod saved;
+mod streams;
 pub use batches::compare_batches;
 pub use boxes::{BoxMismatch, compare_boxes, scene_boxes};
 pub use bundles::{
@@ -82,6 +84,7 @@ pub use refit::{check_refit_case, check_refit_random, check_refit_scenes};
 pub use saved::{
     DAMAGES, TRUNCATIONS, check_damaged, check_saved_case, check_saved_scenes, compare_saved,
 };
+pub use streams::{LONG_STREAM, STREAM_SIZES, compare_streams};
 
 /// A disagreement between a structure and brute force on one ray.
 #[derive(Clone, Debug)]
@@ -491,7 +494,8 @@ pub enum Part {
     /// The any hit ([`Accel::occluded`]), invalid rays answered at once.
     Any,
     /// The bundle queries give the single queries' bits ([`compare_bundles`]), and so do the
-    /// ray batches. (Each other part checks its query's batch too: [`compare_batches`].)
+    /// stream queries ([`compare_streams`]) and the ray batches. (Each other part checks its
+    /// query's batch too: [`compare_batches`].)
     Bundles,
     /// Closest points ([`compare_points`]).
     ClosestPoints,
@@ -611,6 +615,9 @@ fn check_parts<A: Accel + 'static>(
         if has(Part::Bundles) {
             // The bundle queries must give the single queries' answers.
             let single = bundles::compare_bundles_probed(accel, &rays, bundles_any, probe)
+                .map_err(|m| failed(&m))?;
+            // And the stream queries, in any order and at any length.
+            streams::compare_streams_probed(accel, &rays, bundles_any, probe)
                 .map_err(|m| failed(&m))?;
             // And so must the batches, on other threads.
             let rays = &rays;

@@ -344,6 +344,63 @@ pub trait Accel: Sized + Send + Sync {
         self.occluded_bundle_with(rays, out, &mut NoStats);
     }
 
+    /// The closest hit of each ray of `rays`, into the same slot of `out`, reporting events to
+    /// `stats`, for rays that need not be coherent (a path tracer's bounces, scattered shadow
+    /// rays, rays in any order): as many rays as both slices have slots, the rest left alone.
+    ///
+    /// Every answer is exactly [`intersect_with`](Accel::intersect_with)'s for that ray,
+    /// whatever order the rays come in. The default traces one ray at a time
+    /// ([`intersect_each`]); a structure that walks many rays together (rt-bvh's stream
+    /// traversal) overrides it. Where [`intersect_bundle_with`](Accel::intersect_bundle_with)
+    /// gains from rays that lie together in the slice, this gains from many rays, wherever
+    /// they go. Node visits count per ray and node (or cell) tested, as single rays count them.
+    #[inline]
+    fn intersect_stream_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        stats: &mut S,
+    ) {
+        intersect_each(self, rays, out, stats);
+    }
+
+    /// Whether anything is hit in each ray's interval, into the same slot of `out`, for rays
+    /// in any order: [`intersect_stream_with`](Accel::intersect_stream_with) for occlusion,
+    /// each answer exactly [`occluded_with`](Accel::occluded_with)'s.
+    #[inline]
+    fn occluded_stream_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
+        occluded_each(self, rays, out, stats);
+    }
+
+    /// [`intersect_stream_with`](Accel::intersect_stream_with), uncounted.
+    ///
+    /// ```
+    /// use rt_core::{Accel, BruteForce, Ray, Triangle, glam::Vec3};
+    /// let tris = [Triangle::new(Vec3::new(-1.0, -1.0, 0.0), Vec3::new(1.0, -1.0, 0.0), Vec3::Y)];
+    /// let accel = BruteForce::build(&tris, &());
+    /// // Rays from scattered points, every one towards the triangle's centre.
+    /// let rays: Vec<Ray> = (0..100)
+    ///     .map(|i| {
+    ///         let from = Vec3::new((i % 7) as f32 - 3.0, (i % 5) as f32 - 2.0, -1.0 - (i % 3) as f32);
+    ///         Ray::new(from, Vec3::new(0.0, -1.0 / 3.0, 0.0) - from)
+    ///     })
+    ///     .collect();
+    /// let mut hits = vec![None; rays.len()];
+    /// accel.intersect_stream(&rays, &mut hits);
+    /// assert!(hits.iter().all(|h| h.is_some_and(|h| h.prim == 0)));
+    /// assert!(hits.iter().zip(&rays).all(|(h, r)| *h == accel.intersect(r)));
+    /// ```
+    #[inline]
+    fn intersect_stream(&self, rays: &[Ray], out: &mut [Option<Hit>]) {
+        self.intersect_stream_with(rays, out, &mut NoStats);
+    }
+
+    /// [`occluded_stream_with`](Accel::occluded_stream_with), uncounted.
+    #[inline]
+    fn occluded_stream(&self, rays: &[Ray], out: &mut [bool]) {
+        self.occluded_stream_with(rays, out, &mut NoStats);
+    }
+
     /// The box around every valid primitive the structure holds ([`Aabb::EMPTY`] if none).
     fn bounds(&self) -> Aabb;
 

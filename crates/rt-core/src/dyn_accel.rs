@@ -150,6 +150,22 @@ pub trait DynAccel<P>: Send + Sync {
         }
         self.occluded_all(rays, out, counters);
     }
+    /// [`Accel::intersect_stream`]: the rays traced as the structure's streams, counted into
+    /// `counters` if given. The default, for wrappers that trace no streams, is
+    /// [`intersect_all`](DynAccel::intersect_all).
+    fn intersect_stream_dyn(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        counters: Option<&mut Counters>,
+    ) {
+        self.intersect_all(rays, out, counters);
+    }
+    /// [`Accel::occluded_stream`], counted into `counters` if given. The default is
+    /// [`occluded_all`](DynAccel::occluded_all).
+    fn occluded_stream_dyn(&self, rays: &[Ray], out: &mut [bool], counters: Option<&mut Counters>) {
+        self.occluded_all(rays, out, counters);
+    }
     /// [`Accel::closest_point`] for each `(point, max_distance)` into the same slot of `out` (as
     /// many as both have), counted into `counters` if given.
     fn closest_points_all(
@@ -431,6 +447,25 @@ impl<A: Accel> DynAccel<A::Prim> for A {
         match counters {
             Some(c) => self.occluded_bundle_with(rays, out, c),
             None => self.occluded_bundle_with(rays, out, &mut NoStats),
+        }
+    }
+
+    fn intersect_stream_dyn(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        counters: Option<&mut Counters>,
+    ) {
+        match counters {
+            Some(c) => self.intersect_stream_with(rays, out, c),
+            None => self.intersect_stream_with(rays, out, &mut NoStats),
+        }
+    }
+
+    fn occluded_stream_dyn(&self, rays: &[Ray], out: &mut [bool], counters: Option<&mut Counters>) {
+        match counters {
+            Some(c) => self.occluded_stream_with(rays, out, c),
+            None => self.occluded_stream_with(rays, out, &mut NoStats),
         }
     }
 

@@ -37,6 +37,8 @@ pub struct Row {
     pub(crate) answers: Vec<Option<Hit>>,
     /// The same rays traced as bundles (`compare --bundle`).
     pub bundle: Option<BundleRow>,
+    /// The same rays traced as streams (`compare --stream`), in the same form.
+    pub stream: Option<BundleRow>,
 }
 
 impl Row {
@@ -123,7 +125,10 @@ impl Report {
     pub fn total_mismatches(&self) -> usize {
         self.rows
             .iter()
-            .map(|r| r.mismatches + r.bundle.as_ref().map_or(0, |b| b.differences))
+            .map(|r| {
+                let differences = |b: &Option<BundleRow>| b.as_ref().map_or(0, |b| b.differences);
+                r.mismatches + differences(&r.bundle) + differences(&r.stream)
+            })
             .sum()
     }
 

@@ -50,6 +50,9 @@ impl<A: Refit<Prim = Triangle>> Refittable for A {
 
 /// Queries per task of the parallel passes; the trait object is crossed once per task.
 const CHUNK: usize = 256;
+/// Rays per task of a stream pass: a stream gains from many rays at once (rt-bvh's streams
+/// take up to 4,096), and a task's answers should stay in the caches as a chunk's do.
+const STREAM_TASK: usize = 4096;
 const OCCLUDED: Hit = Hit {
     prim: u32::MAX,
     t: f32::NAN,
@@ -63,10 +66,19 @@ fn counted_chunks<T: Sync, A: Clone + Send>(
     items: &[T],
     fill: impl Fn(&[T], &mut [Option<A>], &mut Counters) + Sync,
 ) -> (Vec<Option<A>>, Counters) {
+    counted_tasks(items, CHUNK, fill)
+}
+
+/// [`counted_chunks`] in tasks of `task` items.
+fn counted_tasks<T: Sync, A: Clone + Send>(
+    items: &[T],
+    task: usize,
+    fill: impl Fn(&[T], &mut [Option<A>], &mut Counters) + Sync,
+) -> (Vec<Option<A>>, Counters) {
     let mut answers = vec![None; items.len()];
     let counters = answers
-        .par_chunks_mut(CHUNK)
-        .zip(items.par_chunks(CHUNK))
+        .par_chunks_mut(task)
+        .zip(items.par_chunks(task))
         .map(|(out, items)| {
             let mut c = Counters::default();
             fill(items, out, &mut c);
@@ -83,6 +95,16 @@ pub enum Pass {
     Single,
     /// As bundles ([`DynAccel::intersect_bundle_dyn`], [`DynAccel::occluded_bundle_dyn`]).
     Bundles,
+    /// As streams ([`DynAccel::intersect_stream_dyn`], [`DynAccel::occluded_stream_dyn`]).
+    Streams,
+}
+
+/// Rays per task of a pass.
+fn task_len(pass: Pass) -> usize {
+    match pass {
+        Pass::Streams => STREAM_TASK,
+        Pass::Single | Pass::Bundles => CHUNK,
+    }
 }
 
 /// One task's answers to `rays` into `out`, counted into `counters` if given.
@@ -97,12 +119,19 @@ fn answer_chunk(
     match (query, pass) {
         (Query::Closest, Pass::Single) => s.intersect_all(rays, out, counters),
         (Query::Closest, Pass::Bundles) => s.intersect_bundle_dyn(rays, out, counters),
+        (Query::Closest, Pass::Streams) => s.intersect_stream_dyn(rays, out, counters),
         (Query::Any, _) => {
-            let mut blocked = [false; CHUNK];
-            let blocked = &mut blocked[..rays.len().min(CHUNK)];
+            let (mut kept, mut long) = ([false; CHUNK], Vec::new());
+            let blocked = if rays.len() <= CHUNK {
+                &mut kept[..rays.len()]
+            } else {
+                long.resize(rays.len(), false);
+                &mut long[..]
+            };
             match pass {
                 Pass::Single => s.occluded_all(rays, blocked, counters),
                 Pass::Bundles => s.occluded_bundle_dyn(rays, blocked, counters),
+                Pass::Streams => s.occluded_stream_dyn(rays, blocked, counters),
             }
             for (o, &b) in out.iter_mut().zip(blocked.iter()) {
                 *o = b.then_some(OCCLUDED);
@@ -129,7 +158,7 @@ pub fn trace_counted_as(
     query: Query,
     pass: Pass,
 ) -> (Vec<Option<Hit>>, Counters) {
-    counted_chunks(rays, |rays, out, c| {
+    counted_tasks(rays, task_len(pass), |rays, out, c| {
         answer_chunk(s, rays, query, pass, out, Some(c))
     })
 }
@@ -142,10 +171,15 @@ pub fn trace_timed(s: &dyn DynAccel<Triangle>, rays: &[Ray], query: Query) -> us
 
 /// [`trace_timed`], handing the rays over as `pass` says.
 pub fn trace_timed_as(s: &dyn DynAccel<Triangle>, rays: &[Ray], query: Query, pass: Pass) -> usize {
-    rays.par_chunks(CHUNK)
+    rays.par_chunks(task_len(pass))
         .map(|rays| {
-            let mut out = [None; CHUNK];
-            let out = &mut out[..rays.len()];
+            let (mut kept, mut long) = ([None; CHUNK], Vec::new());
+            let out = if rays.len() <= CHUNK {
+                &mut kept[..rays.len()]
+            } else {
+                long.resize(rays.len(), None);
+                &mut long[..]
+            };
             answer_chunk(s, rays, query, pass, out, None);
             out.iter().filter(|h| h.is_some()).count()
         })

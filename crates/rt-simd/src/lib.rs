@@ -52,7 +52,7 @@ mod x86;
 pub use bundle::{BUNDLE_LANES, Bundle, BundledBruteForce, LaneBounds, Lanes};
 pub use isa::{Isa, WithLanes};
 pub use moller::moller_trumbore;
-pub use slab::{SlabRay, slab};
+pub use slab::{SlabRay, slab, slab_lanes};
 pub use vector::{Portable, Simd};
 pub use watertight::{Hits, watertight};
 #[cfg(target_arch = "x86_64")]

@@ -47,6 +47,19 @@ pub fn slab<const N: usize, S: Simd<N>>(
     r: &SlabRay<S::V>,
     t_max: f32,
 ) -> (u32, S::V) {
+    let (entered, t0) = slab_lanes(s, bounds, r, t_max);
+    (s.bits(entered), t0)
+}
+
+/// [`slab`] with the boxes entered as a lane mask rather than bits, for a caller that goes on
+/// computing with it lane by lane (a stream's sums of entry distances).
+#[inline(always)]
+pub fn slab_lanes<const N: usize, S: Simd<N>>(
+    s: S,
+    bounds: &[[f32; N]; 6],
+    r: &SlabRay<S::V>,
+    t_max: f32,
+) -> (S::M, S::V) {
     let mut t0 = r.t_min;
     let mut t1 = s.splat(t_max);
     for a in 0..3 {
@@ -64,6 +77,5 @@ pub fn slab<const N: usize, S: Simd<N>>(
         t0 = s.max(tn, t0);
         t1 = s.min(tf, t1);
     }
-    let mask = s.bits(s.le(t0, s.mul(t1, s.splat(SLAB_FAR_SCALE))));
-    (mask, t0)
+    (s.le(t0, s.mul(t1, s.splat(SLAB_FAR_SCALE))), t0)
 }

@@ -42,6 +42,18 @@ rt_conformance::conformance_tests!(
         ablation: Ablation {
             sort_children: false,
             any_hit_path: false,
+            stream_walk: false,
+        },
+        ..BvhParams::wide()
+    }
+);
+rt_conformance::conformance_tests!(
+    wide_stream,
+    Bvh<Triangle>,
+    BvhParams {
+        ablation: Ablation {
+            stream_walk: true,
+            ..Ablation::default()
         },
         ..BvhParams::wide()
     }

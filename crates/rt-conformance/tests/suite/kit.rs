@@ -577,6 +577,61 @@ fn a_bundle_traversal_that_drops_a_lane_fails() {
     assert!(e.contains("intersect_bundle gives"), "{e}");
 }
 
+/// A structure whose stream queries lose the answers of rays past the 256th of a stream (no
+/// hit, not occluded), as a stream traversal that mishandles its chunks might. Everything else
+/// is brute force's.
+struct LosesLongStreams(BruteForce<Triangle>);
+
+impl Accel for LosesLongStreams {
+    forward_to_brute_force!();
+    const NAME: &'static str = "loses-long-streams";
+    fn ray_query<Q: RayQuery, S: Stats>(&self, ray: &Ray, query: &mut Q, stats: &mut S) {
+        self.0.ray_query(ray, query, stats);
+    }
+    fn ball_query<Q: BallQuery<Triangle>, S: Stats>(&self, query: &mut Q, stats: &mut S) {
+        self.0.ball_query(query, stats);
+    }
+    fn intersect_stream_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        stats: &mut S,
+    ) {
+        for (i, (slot, ray)) in out.iter_mut().zip(rays).enumerate() {
+            *slot = (i < 256)
+                .then(|| self.0.intersect_with(ray, stats))
+                .flatten();
+        }
+    }
+    fn occluded_stream_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
+        for (i, (slot, ray)) in out.iter_mut().zip(rays).enumerate() {
+            *slot = i < 256 && self.0.occluded_with(ray, stats);
+        }
+    }
+}
+
+/// The stream check passes brute force (whose stream queries are the default loop) and fails
+/// stream queries that lose answers in long streams, naming the ray, the order and the stream's
+/// length; the whole kit runs it.
+#[test]
+fn stream_queries_that_lose_answers_fail() {
+    let s = scene("shared_edge");
+    let brute = BruteForce::build(&s.triangles, &());
+    rt_conformance::compare_streams(&brute, &s.rays, true).unwrap();
+    let e = rt_conformance::compare_streams(&LosesLongStreams(brute), &s.rays, true)
+        .expect_err("a lost answer must be caught");
+    assert!(
+        e.starts_with("loses-long-streams: intersect_stream gives None where intersect gives Some"),
+        "{e}"
+    );
+    assert!(e.contains("(rays as given, "), "{e}");
+    assert!(e.contains("stream of"), "{e}");
+    let e =
+        check_case_within::<LosesLongStreams>(&(), &s.triangles, &s.rays, Duration::from_secs(20))
+            .expect_err("the kit must run the stream check");
+    assert!(e.contains("intersect_stream gives"), "{e}");
+}
+
 /// Brute force with a bundle walk of its own: every lane of a bundle tested against every
 /// triangle through the shared eight-lane tests, except that with `DROP` the last lane of every
 /// bundle gets no answer; with `ALONE` the bundle queries are the default loop over single rays.

@@ -151,6 +151,12 @@ pub struct Args {
     /// them; every bundle answer must equal the row's single answer bit for bit.
     #[arg(long, value_name = "WxH", value_parser = crate::cli::tile)]
     pub bundle: Option<(u32, u32)>,
+    /// Also trace every row's rays as streams (`Accel::intersect_stream`, `occluded_stream`),
+    /// in the order `--bundle` gives them (else as they come), and set a table of the streams'
+    /// speed and steps beside the single rays'; every stream answer must equal the row's single
+    /// answer bit for bit.
+    #[arg(long)]
+    pub stream: bool,
     /// Comma-separated rows to run (listed below); brute force is always the baseline.
     /// [default: every row]
     #[arg(short, long, value_delimiter = ',')]

@@ -174,51 +174,76 @@ pub fn to_table(r: &Report) -> String {
             );
         }
     }
-    let bundled: Vec<(&Row, &BundleRow)> = r
-        .rows
-        .iter()
-        .filter_map(|row| row.bundle.as_ref().map(|b| (row, b)))
-        .collect();
-    if !bundled.is_empty() {
-        let _ = writeln!(
-            s,
-            "\nBundles: the same rays traced as bundles; speed, and its ratio to the row's single \
-             rays measured in the same run; nodes or cells entered per ray (a bundle's step counts \
-             once), tests per ray, the share of lanes active at a bundle's steps, the share of rays \
-             traced singly, and answers that differ from the single ones in any bit"
-        );
-        let _ = writeln!(
-            s,
-            "{:<w$} {:>11} {:>9} {:>10} {:>10} {:>9} {:>7} {:>11}",
-            "structure",
-            "Mrays/s",
-            "x single",
-            "visits/ray",
-            "tests/ray",
-            "lane use",
-            "alone",
-            "differences"
-        );
-        for (row, b) in bundled {
-            let _ = writeln!(
-                s,
-                "{:<w$} {:>11} {:>8.2}x {:>10} {:>10} {:>9} {:>6.1}% {:>11}",
-                row.name,
-                three_digits(b.mrays_per_s),
-                b.over_single,
-                three_digits(b.avg_visits),
-                three_digits(b.avg_prim_tests),
-                b.lane_utilisation
-                    .map_or("-".to_string(), |u| format!("{:.0}%", 100.0 * u)),
-                100.0 * b.single_share,
-                b.differences
-            );
-        }
-    }
+    batch_table(
+        &mut s,
+        w,
+        r,
+        |row| row.bundle.as_ref(),
+        "Bundles: the same rays traced as bundles; speed, and its ratio to the row's single rays \
+         measured in the same run; nodes or cells entered per ray (a bundle's step counts once), \
+         tests per ray, the share of lanes active at a bundle's steps, the share of rays traced \
+         singly, and answers that differ from the single ones in any bit",
+    );
+    batch_table(
+        &mut s,
+        w,
+        r,
+        |row| row.stream.as_ref(),
+        "Streams: the same rays traced as streams; speed, and its ratio to the row's single rays \
+         measured in the same run; nodes or cells tested per ray, tests per ray, and answers \
+         that differ from the single ones in any bit",
+    );
     if r.rows.len() > 1 && r.total_mismatches() == 0 {
         let _ = writeln!(s, "all answers agree");
     }
     s
+}
+
+/// The table of a batch pass (bundles or streams) beside the rows' single rays, if any row
+/// has one.
+fn batch_table(
+    s: &mut String,
+    w: usize,
+    r: &Report,
+    batch: impl Fn(&Row) -> Option<&BundleRow>,
+    title: &str,
+) {
+    let rows: Vec<(&Row, &BundleRow)> = r
+        .rows
+        .iter()
+        .filter_map(|row| batch(row).map(|b| (row, b)))
+        .collect();
+    if rows.is_empty() {
+        return;
+    }
+    let _ = writeln!(s, "\n{title}");
+    let _ = writeln!(
+        s,
+        "{:<w$} {:>11} {:>9} {:>10} {:>10} {:>9} {:>7} {:>11}",
+        "structure",
+        "Mrays/s",
+        "x single",
+        "visits/ray",
+        "tests/ray",
+        "lane use",
+        "alone",
+        "differences"
+    );
+    for (row, b) in rows {
+        let _ = writeln!(
+            s,
+            "{:<w$} {:>11} {:>8.2}x {:>10} {:>10} {:>9} {:>6.1}% {:>11}",
+            row.name,
+            three_digits(b.mrays_per_s),
+            b.over_single,
+            three_digits(b.avg_visits),
+            three_digits(b.avg_prim_tests),
+            b.lane_utilisation
+                .map_or("-".to_string(), |u| format!("{:.0}%", 100.0 * u)),
+            100.0 * b.single_share,
+            b.differences
+        );
+    }
 }
 
 fn hit_json(h: Option<Hit>, query_any: bool) -> serde_json::Value {
@@ -264,8 +289,9 @@ pub(super) fn to_json(r: &Report) -> String {
                 "predicted_visits": row.predicted.map(|p| p.visits),
                 "predicted_tests": row.predicted.map(|p| p.tests),
             });
-            if let Some(b) = &row.bundle {
-                v["bundle"] = serde_json::json!({
+            for (key, b) in [("bundle", &row.bundle), ("stream", &row.stream)] {
+                let Some(b) = b else { continue };
+                v[key] = serde_json::json!({
                     "mrays_per_s": b.mrays_per_s,
                     "over_single": b.over_single,
                     "avg_visits": b.avg_visits,

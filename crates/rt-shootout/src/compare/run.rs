@@ -195,6 +195,7 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
             query,
             args.repeats,
             args.bundle.is_some(),
+            args.stream,
         );
         row.predicted = predicted_per_ray(s.as_ref(), &rays, &bounds);
         rows.push(row);
@@ -225,6 +226,7 @@ fn measure(args: &Args, threads: usize, entries: Vec<structures::Entry>) -> Resu
         timed,
         query,
         0,
+        false,
         false,
     );
     let (answers, _) =
@@ -545,9 +547,10 @@ pub(super) fn make_rays(
 /// Checked rays that brute force's single-ray query is timed on (see [`measure`]).
 const BRUTE_TIMED: usize = 1_000;
 
-/// A row's counted pass and its best timed pass over `repeats`; with `bundles`, the same for
-/// the bundle queries, each bundle pass timed right after a single one, and every bundle answer
-/// compared with the single answer bit for bit.
+/// A row's counted pass and its best timed pass over `repeats`; with `bundles` and
+/// `streams`, the same for the bundle and stream queries, each pass timed right after a single
+/// one, and every answer compared with the single answer bit for bit.
+#[allow(clippy::too_many_arguments)]
 fn trace_row(
     name: &str,
     s: &dyn DynAccel<Triangle>,
@@ -556,36 +559,42 @@ fn trace_row(
     query: Query,
     repeats: u32,
     bundles: bool,
+    streams: bool,
 ) -> Row {
     let t = Instant::now();
     let (answers, counters) = structures::trace_counted(s, rays, query);
     let mut best = t.elapsed();
     let mut hits = answers.iter().filter(|a| a.is_some()).count();
-    let bundled = bundles.then(|| {
-        let t = Instant::now();
-        let (got, counters) = structures::trace_counted_as(s, rays, query, Pass::Bundles);
-        (got, counters, t.elapsed())
-    });
-    let mut best_bundle = bundled.as_ref().map(|b| b.2);
+    // Each batch pass: its answers and counters from a counted pass, and its best time.
+    let mut batches: Vec<(Pass, Vec<Option<Hit>>, rt_core::Counters, Duration)> =
+        [(bundles, Pass::Bundles), (streams, Pass::Streams)]
+            .into_iter()
+            .filter(|&(on, _)| on)
+            .map(|(_, pass)| {
+                let t = Instant::now();
+                let (got, counters) = structures::trace_counted_as(s, rays, query, pass);
+                (pass, got, counters, t.elapsed())
+            })
+            .collect();
     if repeats > 0 {
         best = Duration::MAX;
-        best_bundle = best_bundle.map(|_| Duration::MAX);
+        batches.iter_mut().for_each(|b| b.3 = Duration::MAX);
     }
     for _ in 0..repeats {
         let t = Instant::now();
         hits = structures::trace_timed(s, rays, query);
         best = best.min(t.elapsed());
-        if let Some(b) = &mut best_bundle {
+        for (pass, _, _, time) in &mut batches {
             let t = Instant::now();
-            std::hint::black_box(structures::trace_timed_as(s, rays, query, Pass::Bundles));
-            *b = (*b).min(t.elapsed());
+            std::hint::black_box(structures::trace_timed_as(s, rays, query, *pass));
+            *time = (*time).min(t.elapsed());
         }
     }
     let mut row = Row::measured(name, s, build_ms, rays.len(), hits, counters, best);
-    if let (Some((got, c, _)), Some(time)) = (bundled, best_bundle) {
+    for (pass, got, c, time) in batches {
         let n = rays.len().max(1) as f64;
         let mrays_per_s = rays.len() as f64 / time.as_secs_f64().max(1e-9) / 1e6;
-        row.bundle = Some(BundleRow {
+        let batch = BundleRow {
             mrays_per_s,
             over_single: mrays_per_s / row.mrays_per_s,
             avg_visits: c.node_visits as f64 / n,
@@ -597,7 +606,11 @@ fn trace_row(
                 .zip(&answers)
                 .filter(|(a, b)| !rt_conformance::same_bits(**a, **b))
                 .count(),
-        });
+        };
+        match pass {
+            Pass::Streams => row.stream = Some(batch),
+            _ => row.bundle = Some(batch),
+        }
     }
     row.answers = answers;
     row
@@ -640,6 +653,7 @@ impl Row {
             predicted: None,
             answers: Vec::new(),
             bundle: None,
+            stream: None,
         }
     }
 }

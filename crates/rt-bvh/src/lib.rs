@@ -26,6 +26,10 @@
 //!   largest boxes are taken out one at a time and put back where they add the least area
 //!   (Bittner, Hapala & Havran 2013), keeping every leaf. A top-down build never revisits a
 //!   split; this repairs the ones made near the root where large and small triangles mix.
+//! - **Stream** (preset `stream`, [`Ablation::stream_walk`]): the wide tree, whose stream
+//!   queries ([`Accel::intersect_stream`]) walk up to 4,096 rays together, node by node, each
+//!   node's rays filtered into its children's lists (Barringer & Akenine-Möller 2014). Still
+//!   being measured, so off by default: the default stream queries trace ray by ray.
 //!
 //! # Layouts in bytes
 //! - [`Node`] (binary): 32 bytes — its box (24), second child or first primitive (4), primitive

@@ -29,6 +29,7 @@ use crate::node::{ChildRef, WIDTH, WideNode};
 use crate::traverse::{self, Leaves, WIDE_STACK};
 use rt_core::glam::Vec3;
 use rt_core::{AnyHit, ClosestHit, Hit, Ray, Shear, Stack, Stats};
+use rt_simd::bundle::octant;
 use rt_simd::{Simd, WithLanes, slab_lanes};
 use std::cell::RefCell;
 
@@ -97,7 +98,7 @@ impl Scratch {
             let dir = if valid { ray.dir() } else { Vec3::Z };
             self.shear.push(Shear::new(dir));
             if valid {
-                self.octants[octant(dir)] += 1;
+                self.octants[octant(ray)] += 1;
             }
         }
         // The valid rays sorted by octant (a counting sort, each octant in ray order).
@@ -109,18 +110,13 @@ impl Scratch {
         self.lists.resize(valid, 0);
         for (i, ray) in rays.iter().enumerate() {
             if ray.is_valid() {
-                let o = octant(ray.dir());
+                let o = octant(ray);
                 self.lists[at[o]] = i as u16;
                 at[o] += 1;
             }
         }
         valid > 0
     }
-}
-
-/// The direction octant of `d`: bit `a` set when its component `a` is negative.
-fn octant(d: Vec3) -> usize {
-    usize::from(d.x < 0.0) | usize::from(d.y < 0.0) << 1 | usize::from(d.z < 0.0) << 2
 }
 
 thread_local! {

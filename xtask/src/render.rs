@@ -283,7 +283,11 @@ fn path_picture(args: &Args, scene: &RenderScene, threads: usize) -> Result<bool
     for entry in &entries {
         let tracer = shape_builder(entry)?(&shapes);
         let mut runs = Vec::new();
-        for tracing in [rt_render::Tracing::Single, rt_render::Tracing::Batch] {
+        for tracing in [
+            rt_render::Tracing::Single,
+            rt_render::Tracing::Batch,
+            rt_render::Tracing::Paired,
+        ] {
             let bar = progress_bar(&format!("path {} {tracing:?}", entry.name));
             let start = Instant::now();
             let run = rt_render::render_path(
@@ -301,8 +305,8 @@ fn path_picture(args: &Args, scene: &RenderScene, threads: usize) -> Result<bool
             bar.finish_and_clear();
             runs.push((run, start.elapsed()));
         }
-        let [(single, single_time), (batch, batch_time)] =
-            <[_; 2]>::try_from(runs).map_err(|_| "two renders".to_string())?;
+        let [(single, single_time), (batch, batch_time), (paired, _)] =
+            <[_; 3]>::try_from(runs).map_err(|_| "three renders".to_string())?;
         let mut verdict = match &first {
             None => {
                 batch.image.save_png(&args.out).map_err(|e| e.to_string())?;
@@ -314,9 +318,16 @@ fn path_picture(args: &Args, scene: &RenderScene, threads: usize) -> Result<bool
                 format!("DIFFERENT bytes from {name}")
             }
         };
-        if single.image != batch.image {
+        let differences: u64 = paired
+            .depths
+            .iter()
+            .filter_map(|d| d.paired.map(|p| p.differences))
+            .sum();
+        if single.image != batch.image || paired.image != batch.image || differences > 0 {
             same = false;
-            verdict.push_str(", single rays and batches DIFFERENT");
+            verdict.push_str(&format!(
+                ", single rays and batches DIFFERENT ({differences} answers differ)"
+            ));
         }
         println!(
             "{verdict}: {} {}×{}, {} paths per pixel, depth {}, {} primitives; {} rendered in {:.2} s with single rays, {:.2} s with batches, on {} threads",
@@ -331,7 +342,7 @@ fn path_picture(args: &Args, scene: &RenderScene, threads: usize) -> Result<bool
             batch_time.as_secs_f64(),
             threads
         );
-        println!("{}", depth_table(&single.depths, &batch.depths));
+        println!("{}", depth_table(&paired.depths));
         if first.is_none() {
             first = Some((entry.name.clone(), batch.image));
         }
@@ -341,31 +352,34 @@ fn path_picture(args: &Args, scene: &RenderScene, threads: usize) -> Result<bool
 
 /// Each bounce depth's rays, their hit (or blocked) share and speed with single rays and with
 /// batches, in million rays per second per thread (rays over the time the threads spent in the
-/// trace calls).
-fn depth_table(single: &[rt_render::DepthStats], batch: &[rt_render::DepthStats]) -> String {
+/// trace calls), from a render that traced every call both ways ([`rt_render::Tracing::Paired`]).
+fn depth_table(depths: &[rt_render::DepthStats]) -> String {
     let rate = |rays: u64, t: std::time::Duration| rays as f64 / t.as_secs_f64().max(1e-9) / 1e6;
     let share = |part: u64, all: u64| 100.0 * part as f64 / all.max(1) as f64;
     let mut out = String::from(
         "depth  closest rays   hit  single  batch  ratio | shadow rays  blocked  single  batch  ratio\n",
     );
-    for (d, (s, b)) in single.iter().zip(batch).enumerate() {
-        let (cs, cb) = (rate(s.rays, s.trace), rate(b.rays, b.trace));
+    for (d, b) in depths.iter().enumerate() {
+        let s = b.paired.unwrap_or_default();
+        let (cs, cb) = (rate(b.rays, s.trace), rate(b.rays, b.trace));
         let (ss, sb) = (
-            rate(s.shadow_rays, s.shadow_trace),
+            rate(b.shadow_rays, s.shadow_trace),
             rate(b.shadow_rays, b.shadow_trace),
         );
         let _ = writeln!(
             out,
             "{d:>5} {:>13} {:>4.0}% {cs:>7.2} {cb:>6.2} {:>5.2}x | {:>11} {:>7.0}% {ss:>7.2} {sb:>6.2} {:>5.2}x",
-            s.rays,
-            share(s.hits, s.rays),
+            b.rays,
+            share(b.hits, b.rays),
             cb / cs,
-            s.shadow_rays,
-            share(s.blocked, s.shadow_rays),
+            b.shadow_rays,
+            share(b.blocked, b.shadow_rays),
             sb / ss.max(1e-9),
         );
     }
-    out.push_str("(single and batch: million rays per second per thread, in the trace calls)");
+    out.push_str(
+        "(single and batch: million rays per second per thread, in the trace calls; each call traced both ways, one after the other)",
+    );
     out
 }
 

@@ -90,8 +90,8 @@ fn several_rows_render_the_same_picture() {
     std::fs::remove_dir_all(&dir).ok();
 }
 
-/// The path tracer renders through every row twice, with single rays and with batches: every
-/// picture is the same bytes, and each row prints a table of its bounce depths.
+/// The path tracer renders through every row with single rays, with batches and with both
+/// paired: every picture is the same bytes, and each row prints a table of its bounce depths.
 #[test]
 fn path_tracing_renders_the_same_picture_with_single_rays_and_batches() {
     let dir = scratch("path");

@@ -16,8 +16,9 @@
 //!   epsilon.
 //! - [`render_path`]: a path tracer (next-event estimation toward the lights, cosine-weighted
 //!   diffuse bounces, mirror and glass) written as a wavefront, every bounce's rays handed to
-//!   the structure together, one at a time or as one batch ([`Tracing`]), with the rays and
-//!   trace time of each bounce depth ([`DepthStats`]); the picture is the same bytes either way.
+//!   the structure together, one at a time, as one batch, or both ways paired ([`Tracing`]),
+//!   with the rays and trace time of each bounce depth ([`DepthStats`]); the picture is the
+//!   same bytes every way.
 //! - [`cost_map`] and [`heatmap_strip`]: the primary rays' node visits or primitive tests per
 //!   pixel, several structures side by side on one colour scale with a legend.
 //! - [`slice_svg`]: a drawing of a structure's nodes or cells ([`rt_core::Accel::regions`])
@@ -54,7 +55,7 @@ pub use heatmap::{
     CostMap, Metric, Scale, cost_map, draw_text, heatmap_strip, text_width, viridis,
 };
 pub use image::{Image, ImageError, MAX_SIDE, RenderOptions, TILE, encode, render};
-pub use path::{DepthStats, PathOptions, PathRender, Tracing, render_path};
+pub use path::{DepthStats, Paired, PathOptions, PathRender, Tracing, render_path};
 pub use scene::{Material, PointLight, RenderScene, builtin_names, scene};
 pub use slice::{Coloring, SliceOptions, SliceSummary, cross_section, slice_svg, view_axes};
 

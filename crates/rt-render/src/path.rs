@@ -15,7 +15,7 @@
 //! structures' answers alone: single rays and batches give the same bytes, as do all correct
 //! structures.
 
-use crate::image::{block_order, encode, per_tile};
+use crate::image::{TILE, block_order, encode, per_tile};
 use crate::whitted::{Context, albedo};
 use crate::{Image, ImageError, RenderScene};
 use rt_core::glam::Vec3;
@@ -33,6 +33,12 @@ pub enum Tracing {
     /// [`DynAccel::occluded_bundle_dyn`]): the structure chooses per run of rays between
     /// walking them together as bundles and singly.
     Batch,
+    /// Each bounce's rays both ways, singly and as one batch, one after the other (which goes
+    /// first alternates from depth to depth and from tile to tile), each timed; the batch's
+    /// answers drive the paths, and every answer that differs from its single ray's is counted
+    /// ([`Paired`]). Both ways run on the same rays a moment apart, so their ratio holds even
+    /// while the machine's speed drifts, as it does between two whole renders.
+    Paired,
 }
 
 /// How to render a path-traced picture.
@@ -79,6 +85,20 @@ pub struct DepthStats {
     pub blocked: u64,
     /// Time spent in the shadow-ray calls, summed over threads.
     pub shadow_trace: Duration,
+    /// With [`Tracing::Paired`] (where `trace` and `shadow_trace` are the batches' times), the
+    /// same rays traced singly.
+    pub paired: Option<Paired>,
+}
+
+/// The rays of one bounce depth traced singly beside their batches ([`Tracing::Paired`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Paired {
+    /// Time spent in the single closest-hit calls, summed over threads.
+    pub trace: Duration,
+    /// Time spent in the single shadow-ray calls, summed over threads.
+    pub shadow_trace: Duration,
+    /// Answers of the batches that differ from their single rays' in any bit.
+    pub differences: u64,
 }
 
 impl DepthStats {
@@ -89,6 +109,12 @@ impl DepthStats {
         self.shadow_rays += o.shadow_rays;
         self.blocked += o.blocked;
         self.shadow_trace += o.shadow_trace;
+        if let Some(o) = o.paired {
+            let p = self.paired.get_or_insert_default();
+            p.trace += o.trace;
+            p.shadow_trace += o.shadow_trace;
+            p.differences += o.differences;
+        }
     }
 }
 
@@ -168,7 +194,9 @@ pub fn render_path(
             }
         }
         let mut sums = vec![Vec3::ZERO; (w * h) as usize];
-        let stats = trace_paths(&ctx, paths, options.bounces, tracing, &mut sums);
+        // Paired tracing: neighbouring tiles take the two ways in opposite orders.
+        let odd = (x0 / TILE + y0 / TILE) % 2 == 1;
+        let stats = trace_paths(&ctx, paths, options.bounces, (tracing, odd), &mut sums);
         let mut all = depths.lock().unwrap_or_else(|e| e.into_inner());
         if all.len() < stats.len() {
             all.resize(stats.len(), DepthStats::default());
@@ -204,25 +232,52 @@ fn trace_paths(
     ctx: &Context<'_>,
     mut paths: Vec<Path>,
     bounces: u32,
-    tracing: Tracing,
+    (tracing, odd): (Tracing, bool),
     sums: &mut [Vec3],
 ) -> Vec<DepthStats> {
     let mut depths = Vec::new();
     let (mut rays, mut hits, mut shadow, mut planned, mut blocked) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    // With `Tracing::Paired`: the single rays' answers.
+    let (mut alone, mut alone_blocked) = (Vec::new(), Vec::new());
     for depth in 0..=bounces {
         if paths.is_empty() {
             break;
         }
         let mut stats = DepthStats::default();
+        // With `Tracing::Paired`, whether the single rays go first at this depth: the second
+        // finds the first's nodes in the caches, so the order alternates from depth to depth
+        // and from tile to tile.
+        let single_first = odd ^ (depth % 2 == 1);
         rays.clear();
         rays.extend(paths.iter().map(|p| p.ray));
         hits.clear();
         hits.resize(rays.len(), None);
-        stats.trace = timed(|| match tracing {
-            Tracing::Single => ctx.tracer.intersect_all(&rays, &mut hits, None),
-            Tracing::Batch => ctx.tracer.intersect_bundle_dyn(&rays, &mut hits, None),
-        });
+        let single = |rays: &[Ray], out: &mut Vec<Option<Hit>>| {
+            ctx.tracer.intersect_all(rays, out, None);
+        };
+        let batch = |rays: &[Ray], out: &mut Vec<Option<Hit>>| {
+            ctx.tracer.intersect_bundle_dyn(rays, out, None);
+        };
+        stats.trace = match tracing {
+            Tracing::Single => timed(|| single(&rays, &mut hits)),
+            Tracing::Batch => timed(|| batch(&rays, &mut hits)),
+            Tracing::Paired => {
+                let (time, single_time, differences) = paired(
+                    single_first,
+                    &rays,
+                    &mut hits,
+                    &mut alone,
+                    batch,
+                    single,
+                    same_hit,
+                );
+                let p = stats.paired.get_or_insert_default();
+                p.trace = single_time;
+                p.differences += differences;
+                time
+            }
+        };
         stats.rays = rays.len() as u64;
         stats.hits = hits.iter().filter(|h| h.is_some()).count() as u64;
         planned.clear();
@@ -247,10 +302,29 @@ fn trace_paths(
         shadow.extend(planned.iter().map(|p| p.ray));
         blocked.clear();
         blocked.resize(shadow.len(), false);
-        stats.shadow_trace = timed(|| match tracing {
-            Tracing::Single => ctx.tracer.occluded_all(&shadow, &mut blocked, None),
-            Tracing::Batch => ctx.tracer.occluded_bundle_dyn(&shadow, &mut blocked, None),
-        });
+        let single = |rays: &[Ray], out: &mut Vec<bool>| ctx.tracer.occluded_all(rays, out, None);
+        let batch = |rays: &[Ray], out: &mut Vec<bool>| {
+            ctx.tracer.occluded_bundle_dyn(rays, out, None);
+        };
+        stats.shadow_trace = match tracing {
+            Tracing::Single => timed(|| single(&shadow, &mut blocked)),
+            Tracing::Batch => timed(|| batch(&shadow, &mut blocked)),
+            Tracing::Paired => {
+                let (time, single_time, differences) = paired(
+                    single_first,
+                    &shadow,
+                    &mut blocked,
+                    &mut alone_blocked,
+                    batch,
+                    single,
+                    |a, b| a == b,
+                );
+                let p = stats.paired.get_or_insert_default();
+                p.shadow_trace = single_time;
+                p.differences += differences;
+                time
+            }
+        };
         stats.shadow_rays = shadow.len() as u64;
         for (p, &b) in planned.iter().zip(&blocked) {
             if b {
@@ -262,6 +336,41 @@ fn trace_paths(
         depths.push(stats);
     }
     depths
+}
+
+/// `rays` traced by `batch` into `out` and by `single` into `alone` (resized to match), the
+/// single rays first if `single_first`: how long the batch took, how long the single rays took,
+/// and how many answers differ by `same`.
+fn paired<T: Clone + Default>(
+    single_first: bool,
+    rays: &[Ray],
+    out: &mut Vec<T>,
+    alone: &mut Vec<T>,
+    batch: impl Fn(&[Ray], &mut Vec<T>),
+    single: impl Fn(&[Ray], &mut Vec<T>),
+    same: impl Fn(&T, &T) -> bool,
+) -> (Duration, Duration, u64) {
+    alone.clear();
+    alone.resize(out.len(), T::default());
+    let (batch_time, single_time) = if single_first {
+        let s = timed(|| single(rays, alone));
+        (timed(|| batch(rays, out)), s)
+    } else {
+        let b = timed(|| batch(rays, out));
+        (b, timed(|| single(rays, alone)))
+    };
+    let differences = out
+        .iter()
+        .zip(alone.iter())
+        .filter(|(a, b)| !same(a, b))
+        .count();
+    (batch_time, single_time, differences as u64)
+}
+
+/// Whether two closest-hit answers are the same in every bit.
+fn same_hit(a: &Option<Hit>, b: &Option<Hit>) -> bool {
+    let bits = |h: &Option<Hit>| h.map(|h| (h.prim, h.t.to_bits(), h.u.to_bits(), h.v.to_bits()));
+    bits(a) == bits(b)
 }
 
 /// How long `f` took.

@@ -1,7 +1,7 @@
 //! The path tracer: single rays and batches render the same bytes through every structure, the
 //! bounce depths count every ray, and a structure that misses a primitive shows in the picture.
 
-use crate::pictures::structures;
+use crate::pictures::{Singles, structures};
 use rt_core::{Accel, BruteForce, DynAccel, Shape};
 use rt_render::{PathOptions, PathRender, RenderScene, Tracing, render_path};
 
@@ -30,8 +30,9 @@ fn differing(a: &PathRender, b: &PathRender) -> usize {
     a.iter().zip(b).filter(|(a, b)| a != b).count()
 }
 
-/// Brute force's picture, with single rays, against every structure's with single rays and
-/// with batches: the same bytes, and the same rays at every depth.
+/// Brute force's picture, with single rays, against every structure's with single rays, with
+/// batches and with both paired: the same bytes, and the same rays at every depth; paired, no
+/// batch answer differs from its single ray's.
 #[test]
 fn every_structure_renders_the_same_bytes_with_single_rays_and_batches() {
     let scene = RenderScene::whitted();
@@ -39,7 +40,7 @@ fn every_structure_renders_the_same_bytes_with_single_rays_and_batches() {
     let brute = BruteForce::build(&shapes, &());
     let reference = path(&scene, &brute, Tracing::Single);
     for (name, tracer) in structures(&shapes) {
-        for tracing in [Tracing::Single, Tracing::Batch] {
+        for tracing in [Tracing::Single, Tracing::Batch, Tracing::Paired] {
             let run = path(&scene, tracer.as_ref(), tracing);
             let differ = differing(&reference, &run);
             assert_eq!(differ, 0, "{name} {tracing:?}: {differ} pixels differ");
@@ -50,6 +51,15 @@ fn every_structure_renders_the_same_bytes_with_single_rays_and_batches() {
                     .collect()
             };
             assert_eq!(rays(&run), rays(&reference), "{name} {tracing:?}");
+            let paired: Vec<_> = run.depths.iter().map(|d| d.paired).collect();
+            if tracing == Tracing::Paired {
+                assert!(
+                    paired.iter().all(|p| p.is_some_and(|p| p.differences == 0)),
+                    "{name}: {paired:?}"
+                );
+            } else {
+                assert!(paired.iter().all(Option::is_none), "{name} {tracing:?}");
+            }
         }
     }
 }
@@ -92,4 +102,29 @@ fn a_structure_that_misses_a_primitive_renders_other_bytes() {
     let short = rt_bvh::Bvh::build(&shapes[..shapes.len() - 1], &Default::default());
     let reference = path(&scene, &bvh, Tracing::Single);
     assert!(differing(&reference, &path(&scene, &short, Tracing::Single)) > 0);
+}
+
+/// Paired tracing counts the batch answers that differ from their single rays': a structure
+/// whose closest-hit batches lose a hit is caught at every depth it traced a hit, and renders
+/// other bytes.
+#[test]
+fn paired_tracing_counts_batches_that_lose_a_hit() {
+    let scene = RenderScene::whitted();
+    let shapes = scene.shapes();
+    let bvh = rt_bvh::Bvh::build(&shapes, &Default::default());
+    let right = path(&scene, &Singles::<false>(&bvh), Tracing::Paired);
+    let wrong = path(&scene, &Singles::<true>(&bvh), Tracing::Paired);
+    let counted = |r: &PathRender| -> Vec<u64> {
+        r.depths
+            .iter()
+            .map(|d| d.paired.unwrap().differences)
+            .collect()
+    };
+    assert!(
+        counted(&right).iter().all(|&n| n == 0),
+        "{:?}",
+        counted(&right)
+    );
+    assert!(counted(&wrong)[0] > 0, "{:?}", counted(&wrong));
+    assert!(differing(&right, &wrong) > 0);
 }

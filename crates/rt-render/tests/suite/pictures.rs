@@ -66,10 +66,11 @@ fn every_structure_renders_the_same_bytes() {
 }
 
 /// A structure seen without its bundle traversals: every query goes to it, but its bundle queries
-/// are `DynAccel`'s defaults, which trace each ray alone.
-struct Singles<'a>(&'a dyn DynAccel<Shape>);
+/// trace each ray alone, as `DynAccel`'s defaults do; with `LOSES`, its closest-hit batches lose
+/// their first hit (a wrong batch, for the checks that must catch one).
+pub(crate) struct Singles<'a, const LOSES: bool = false>(pub &'a dyn DynAccel<Shape>);
 
-impl DynAccel<Shape> for Singles<'_> {
+impl<const LOSES: bool> DynAccel<Shape> for Singles<'_, LOSES> {
     fn name(&self) -> &'static str {
         self.0.name()
     }
@@ -108,6 +109,17 @@ impl DynAccel<Shape> for Singles<'_> {
     fn occluded_all(&self, rays: &[Ray], out: &mut [bool], counters: Option<&mut Counters>) {
         self.0.occluded_all(rays, out, counters);
     }
+    fn intersect_bundle_dyn(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        counters: Option<&mut Counters>,
+    ) {
+        self.0.intersect_all(rays, out, counters);
+        if let Some(first) = out.iter_mut().find(|h| h.is_some()).filter(|_| LOSES) {
+            *first = None;
+        }
+    }
     fn closest_points_all(
         &self,
         points: &[(Vec3, f32)],
@@ -127,7 +139,7 @@ fn bundles_render_the_single_rays_bytes() {
     let shapes = scene.shapes();
     for (name, tracer) in structures(&shapes) {
         let bundled = picture(&scene, tracer.as_ref());
-        let single = picture(&scene, &Singles(tracer.as_ref()));
+        let single = picture(&scene, &Singles::<false>(tracer.as_ref()));
         let differ = single
             .pixels
             .iter()

@@ -47,6 +47,21 @@ use rt_simd::{BUNDLE_LANES, Bundle, Lanes, Simd, WithLanes};
 // first rays point apart singly), and were 0.98-1.00x at every bound tried.
 pub(crate) const MAX_SPREAD: f32 = 1.0;
 
+/// The most the lanes' origins may spread, as a share of the tree's box's longest side (the
+/// origins' box's longest side against it), for the bundle to walk together; wider bundles go
+/// singly. Lanes from scattered points part ways near their origins, where the tree is finest,
+/// even when they all aim at one light: a bundle then walks the union of its lanes' paths.
+// PERF: AMD Zen 4, one thread, wide BVH, without a bound -> 0.25. A path tracer's shadow rays
+// after a bounce (scattered over the bunny, toward one light): batch ÷ single rays 0.77 ->
+// 0.98 (`cargo xtask render --integrator path --scene ../shared/meshes/stanford-bunny.obj
+// --width 1024 --height 768 --samples 8 --depth 5 -j 1`, each call paired; depth 1, two runs
+// each; 0.1 and 0.05 gave 0.94-0.96). A camera's shadow rays in 8×8 tiles (`cargo xtask compare
+// --rays shadow --bundle 8x8 -s bvh -j 1`, bundles ÷ single rays, two runs each): the
+// sphereflake 1.91 1.79 -> 1.77 1.65 (9.3% of its rays then go singly: tiles across its
+// spheres' depths), the teapot in a stadium 1.81 2.56 -> 2.44 2.92 and the rocker arm 2.70
+// 2.75 -> 2.42 2.83 (0.0% and 0.5% singly: noise), the bunny 2.16 -> 2.12.
+pub(crate) const MAX_ORIGIN_SPREAD: f32 = 0.25;
+
 /// Vectors of eight lanes in a bundle of [`BUNDLE_LANES`].
 const GROUPS: usize = BUNDLE_LANES / 8;
 

@@ -104,9 +104,10 @@
 //! the lanes that reached it fill their vectors (ray-parallel, as packet tracers do), else each
 //! lane alone with its single ray's four-triangle test (`bundle.rs`, `traverse.rs`). Every lane answers exactly
 //! as its single ray does, bit for bit (the conformance kit checks it in every order and bundle
-//! size). A bundle of one ray, a ray with a zero direction component, and a bundle whose
+//! size). A bundle of one ray, a ray with a zero direction component, a bundle whose
 //! directions spread wider than a camera tile's (rays in random directions, which would share
-//! few nodes) take the single-ray path. The binary tree walks bundles with a lane mask per
+//! few nodes) and one whose origins spread over a quarter of the tree's box (shadow rays from
+//! scattered points, which part ways where the tree is finest) take the single-ray path. The binary tree walks bundles with a lane mask per
 //! stack entry and the first-active-lane rule at each box, and tests each primitive of a leaf
 //! against eight lanes per step (`bundle.rs`).
 //!
@@ -629,8 +630,8 @@ impl<P: Primitive> Bvh<P> {
     /// rays as bundles (`bundle.rs`) through rt-core's frame for bundle queries
     /// ([`walk_groups`](rt_simd::bundle::walk_groups)): a bundle that misses the
     /// root's box is answered at once; one whose directions spread more than
-    /// [`bundle::MAX_SPREAD`], a bundle of one ray and a ray that cannot travel in one take the
-    /// single-ray path. The binary tree walks its own way ([`bundle::binary_bundle`]).
+    /// [`bundle::MAX_SPREAD`] or whose origins spread more than [`bundle::MAX_ORIGIN_SPREAD`],
+    /// a bundle of one ray and a ray that cannot travel in one take the single-ray path. The binary tree walks its own way ([`bundle::binary_bundle`]).
     fn bundle_query<S: Stats, const ANY: bool>(
         &self,
         rays: &[Ray],
@@ -640,7 +641,13 @@ impl<P: Primitive> Bvh<P> {
         mut answer: impl FnMut(usize, Option<Hit>),
     ) {
         let rays = &rays[..rays.len().min(slots)];
-        let coherent = |b: &Bundle| b.direction_spread() <= bundle::MAX_SPREAD;
+        let root = self.root_bounds();
+        let side = (root.max - root.min).max_element();
+        let coherent = |b: &Bundle| {
+            let lb = b.lane_bounds();
+            b.direction_spread() <= bundle::MAX_SPREAD
+                && (lb.origin_hi - lb.origin_lo).max_element() <= bundle::MAX_ORIGIN_SPREAD * side
+        };
         let wide = match &self.tree {
             // PERF: a call with one ray goes straight to the single-ray path, without sorting
             // it into a bundle first.
@@ -650,7 +657,7 @@ impl<P: Primitive> Bvh<P> {
                 w
             }
             Tree::Binary { nodes, items } if rays.len() > 1 && !items.ids.is_empty() => {
-                let bounds = self.root_bounds();
+                let bounds = root;
                 rt_simd::bundle::walk_groups_ordered::<S, ANY>(
                     rays,
                     slots,
@@ -679,7 +686,7 @@ impl<P: Primitive> Bvh<P> {
                 return;
             }
         };
-        let bounds = self.root_bounds();
+        let bounds = root;
         rt_simd::bundle::walk_groups_ordered::<S, ANY>(
             rays,
             slots,

@@ -15,7 +15,7 @@ pub const BUNDLE_SIZES: [usize; 8] = [1, 7, 8, 9, 63, 64, 65, 1000];
 // PERF: one pass per length traced each ray set 32 times; the fine grid's identical-triangles
 // case took 36 s of the CI run's tests (opt-level 1). Two cycling passes per order trace it 8
 // times.
-fn cycled_slices(len: usize, downwards: bool) -> Vec<std::ops::Range<usize>> {
+pub(crate) fn cycled_slices(len: usize, downwards: bool) -> Vec<std::ops::Range<usize>> {
     let mut sizes = BUNDLE_SIZES;
     if downwards {
         sizes.reverse();

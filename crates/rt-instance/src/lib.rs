@@ -852,27 +852,91 @@ pub trait TwoLevel<P: Primitive>: Sized + Send + Sync {
         self.intersect_with(ray, &mut NoStats)
     }
 
+    /// [`intersect_with`](Self::intersect_with) of every ray into the same slot of `out` (as
+    /// many as both have), on this thread, counting into `stats`: rays that travel together
+    /// (a camera's tile, shadow rays from nearby points toward one light) may be traced
+    /// together, and every answer is the single query's, bit for bit, whatever rays come
+    /// along with it (the conformance kit checks it). The default, which every scene of this
+    /// workspace uses today, traces the rays one by one.
+    fn intersect_bundle_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<InstanceHit>],
+        stats: &mut S,
+    ) {
+        for (o, r) in out.iter_mut().zip(rays) {
+            *o = self.intersect_with(r, stats);
+        }
+    }
+
+    /// [`occluded_with`](Self::occluded_with) of every ray into the same slot of `out`, as
+    /// [`intersect_bundle_with`](Self::intersect_bundle_with) traces them.
+    fn occluded_bundle_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
+        for (o, r) in out.iter_mut().zip(rays) {
+            *o = self.occluded_with(r, stats);
+        }
+    }
+
+    /// [`intersect_bundle_with`](Self::intersect_bundle_with), uncounted.
+    #[inline]
+    fn intersect_bundle(&self, rays: &[Ray], out: &mut [Option<InstanceHit>]) {
+        self.intersect_bundle_with(rays, out, &mut NoStats);
+    }
+
+    /// [`occluded_bundle_with`](Self::occluded_bundle_with), uncounted.
+    #[inline]
+    fn occluded_bundle(&self, rays: &[Ray], out: &mut [bool]) {
+        self.occluded_bundle_with(rays, out, &mut NoStats);
+    }
+
+    /// The closest hits of rays in any order (a path tracer's bounces, scattered over the
+    /// scene), into the same slots of `out`, counting into `stats`: the one-level stream
+    /// queries' counterpart ([`Accel::intersect_stream_with`](rt_core::Accel::intersect_stream_with)),
+    /// the single query's answers bit for bit. The default is
+    /// [`intersect_bundle_with`](Self::intersect_bundle_with), which sends rays that do not
+    /// travel together singly.
+    #[inline]
+    fn intersect_stream_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<InstanceHit>],
+        stats: &mut S,
+    ) {
+        self.intersect_bundle_with(rays, out, stats);
+    }
+
+    /// [`occluded_with`](Self::occluded_with) of rays in any order, as
+    /// [`intersect_stream_with`](Self::intersect_stream_with) traces them.
+    #[inline]
+    fn occluded_stream_with<S: Stats>(&self, rays: &[Ray], out: &mut [bool], stats: &mut S) {
+        self.occluded_bundle_with(rays, out, stats);
+    }
+
+    /// [`intersect_stream_with`](Self::intersect_stream_with), uncounted.
+    #[inline]
+    fn intersect_stream(&self, rays: &[Ray], out: &mut [Option<InstanceHit>]) {
+        self.intersect_stream_with(rays, out, &mut NoStats);
+    }
+
+    /// [`occluded_stream_with`](Self::occluded_stream_with), uncounted.
+    #[inline]
+    fn occluded_stream(&self, rays: &[Ray], out: &mut [bool]) {
+        self.occluded_stream_with(rays, out, &mut NoStats);
+    }
+
     /// [`intersect`](Self::intersect) of every ray into the same slot of `out` (as many as
     /// both have), on every thread of the current rayon pool as [`rt_core::batch`] runs its
-    /// queries: rays from a slice or from flat rows ([`RaySource`]). A scene may override it
-    /// to trace rays together, and must then answer each exactly as the single query does (the
-    /// conformance kit checks it).
+    /// queries: rays from a slice or from flat rows ([`RaySource`]), each chunk traced by
+    /// [`intersect_bundle`](Self::intersect_bundle). A scene may override it, and must then
+    /// answer each ray exactly as the single query does (the conformance kit checks it).
     fn intersect_batch<R: RaySource + ?Sized>(&self, rays: &R, out: &mut [Option<InstanceHit>]) {
-        batch::for_each_ray_chunk(rays, out, |rays, out| {
-            for (o, r) in out.iter_mut().zip(rays) {
-                *o = self.intersect(r);
-            }
-        });
+        batch::for_each_ray_chunk(rays, out, |rays, out| self.intersect_bundle(rays, out));
     }
 
     /// [`occluded`](Self::occluded) of every ray into the same slot of `out`, as
     /// [`intersect_batch`](Self::intersect_batch) runs.
     fn occluded_batch<R: RaySource + ?Sized>(&self, rays: &R, out: &mut [bool]) {
-        batch::for_each_ray_chunk(rays, out, |rays, out| {
-            for (o, r) in out.iter_mut().zip(rays) {
-                *o = self.occluded(r);
-            }
-        });
+        batch::for_each_ray_chunk(rays, out, |rays, out| self.occluded_bundle(rays, out));
     }
 
     /// Whether anything is hit in the ray's interval.

@@ -590,6 +590,24 @@ impl<T: TwoLevel<Triangle>> Field<T> {
         }
     }
 
+    /// `query(rays, hits)` in chunks of up to 256 rays, each chunk's two-level hits written
+    /// into `out` flattened.
+    fn answer(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        mut query: impl FnMut(&[Ray], &mut [Option<rt_instance::InstanceHit>]),
+    ) {
+        let mut hits = [None; 256];
+        for (rays, out) in rays.chunks(256).zip(out.chunks_mut(256)) {
+            let hits = &mut hits[..rays.len().min(out.len())];
+            query(rays, hits);
+            for (o, h) in out.iter_mut().zip(hits.iter()) {
+                *o = h.map(|h| self.flat(h));
+            }
+        }
+    }
+
     fn point(&self, p: Vec3, max: f32, c: &mut Counters) -> Option<PointHit> {
         self.scene.closest_point_with(p, max, c).map(|h| PointHit {
             prim: h.instance * self.mesh.len() as u32 + h.prim,
@@ -689,6 +707,48 @@ impl<T: TwoLevel<Triangle>> DynAccel<Triangle> for Field<T> {
     fn occluded_all(&self, rays: &[Ray], out: &mut [bool], mut counters: Option<&mut Counters>) {
         for (o, r) in out.iter_mut().zip(rays) {
             *o = self.occluded_dyn(r, counters.as_deref_mut());
+        }
+    }
+
+    /// The scene's bundle queries ([`TwoLevel::intersect_bundle_with`]).
+    fn intersect_bundle_dyn(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        counters: Option<&mut Counters>,
+    ) {
+        let mut counters = counters;
+        self.answer(rays, out, |rays, hits| match counters.as_deref_mut() {
+            Some(c) => self.scene.intersect_bundle_with(rays, hits, c),
+            None => self.scene.intersect_bundle(rays, hits),
+        });
+    }
+
+    fn occluded_bundle_dyn(&self, rays: &[Ray], out: &mut [bool], counters: Option<&mut Counters>) {
+        match counters {
+            Some(c) => self.scene.occluded_bundle_with(rays, out, c),
+            None => self.scene.occluded_bundle(rays, out),
+        }
+    }
+
+    /// The scene's stream queries ([`TwoLevel::intersect_stream_with`]).
+    fn intersect_stream_dyn(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<Hit>],
+        counters: Option<&mut Counters>,
+    ) {
+        let mut counters = counters;
+        self.answer(rays, out, |rays, hits| match counters.as_deref_mut() {
+            Some(c) => self.scene.intersect_stream_with(rays, hits, c),
+            None => self.scene.intersect_stream(rays, hits),
+        });
+    }
+
+    fn occluded_stream_dyn(&self, rays: &[Ray], out: &mut [bool], counters: Option<&mut Counters>) {
+        match counters {
+            Some(c) => self.scene.occluded_stream_with(rays, out, c),
+            None => self.scene.occluded_stream(rays, out),
         }
     }
 

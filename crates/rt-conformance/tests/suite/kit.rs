@@ -317,6 +317,80 @@ fn a_two_level_batch_that_misplaces_answers_fails_with_its_ray_named() {
     );
 }
 
+/// The linear reference with bundle queries that lose the last ray's hit in every call of two
+/// rays or more (`STREAM`: its stream queries instead), as a walk that dropped a lane would.
+struct LosesALane<const STREAM: bool>(rt_instance::LinearInstances<Triangle>);
+
+impl<const STREAM: bool> LosesALane<STREAM> {
+    fn lose<S: Stats>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<rt_instance::InstanceHit>],
+        s: &mut S,
+    ) {
+        rt_instance::TwoLevel::intersect_bundle_with(&self.0, rays, out, s);
+        if let [_, .., last] = out {
+            *last = None;
+        }
+    }
+}
+
+impl<const STREAM: bool> rt_instance::TwoLevel<Triangle> for LosesALane<STREAM> {
+    const NAME: &'static str = "loses-a-lane";
+    fn build(instances: Vec<rt_instance::Instance<Triangle>>) -> Self {
+        Self(rt_instance::LinearInstances::build(instances))
+    }
+    fn intersect_with<S: Stats>(
+        &self,
+        ray: &Ray,
+        stats: &mut S,
+    ) -> Option<rt_instance::InstanceHit> {
+        self.0.intersect_with(ray, stats)
+    }
+    fn intersect_bundle_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<rt_instance::InstanceHit>],
+        stats: &mut S,
+    ) {
+        if STREAM {
+            self.0.intersect_bundle_with(rays, out, stats);
+        } else {
+            self.lose(rays, out, stats);
+        }
+    }
+    fn intersect_stream_with<S: Stats>(
+        &self,
+        rays: &[Ray],
+        out: &mut [Option<rt_instance::InstanceHit>],
+        stats: &mut S,
+    ) {
+        if STREAM {
+            self.lose(rays, out, stats);
+        } else {
+            self.0.intersect_stream_with(rays, out, stats);
+        }
+    }
+    forward_to_linear!();
+}
+
+#[test]
+fn two_level_bundles_or_streams_that_lose_a_lane_fail_with_its_ray_named() {
+    let case = rt_conformance::two_level_scene("mirrored_and_scaled").remove(0);
+    let bundle = rt_conformance::check_two_level_case::<LosesALane<false>>(&[brute_bottom], &case)
+        .expect_err("a bundle that loses a hit must be caught");
+    assert!(
+        bundle.contains("a bundle of") && bundle.contains("ray: Ray::"),
+        "{bundle}"
+    );
+    let stream = rt_conformance::check_two_level_case::<LosesALane<true>>(&[brute_bottom], &case)
+        .expect_err("a stream that loses a hit must be caught");
+    assert!(
+        stream.contains("a stream of") && stream.contains("ray: Ray::"),
+        "{stream}"
+    );
+}
+
 /// Brute force, except that building from a mesh or another source reads the triangles in
 /// reverse order, as a builder that numbered them from the wrong end would.
 struct Reversed(BruteForce<Triangle>);
